@@ -1,0 +1,111 @@
+//! The command line: one subcommand per job. Arguments are validated into the library's option
+//! structs before any work starts; errors print their whole chain and exit with status 1 (2 for
+//! usage errors, from clap).
+
+mod bench;
+mod convert;
+mod inspect;
+
+use crate::io::Format;
+use crate::mesh::polygon::QuadSplit;
+use clap::{Args, Parser, Subcommand};
+use std::io::IsTerminal;
+use std::process::ExitCode;
+
+pub use convert::ConvertReport;
+
+/// drapekit: clean meshes from CAD exports, fitted mannequins, quick cloth drapes.
+#[derive(Debug, Parser)]
+#[command(name = "drapekit", version, about, max_term_width = 100)]
+pub struct Cli {
+    /// Worker threads (1 = serial; default: all cores). Results do not depend on it.
+    #[arg(long, global = true, value_name = "N", value_parser = clap::value_parser!(u16).range(1..))]
+    pub jobs: Option<u16>,
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The jobs.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Convert a mesh: read, weld, clean, orient outward, write; report what was fixed.
+    Convert(convert::ConvertArgs),
+    /// Inspect a mesh as it is: counts, boundaries, manifoldness, winding, volumes, shell state.
+    Inspect(inspect::InspectArgs),
+    /// Benchmarks (speed against a baseline in the same run).
+    #[command(subcommand)]
+    Bench(bench::BenchCommand),
+}
+
+/// How to read an input mesh (shared by every subcommand that reads one).
+#[derive(Debug, Clone, Args)]
+pub struct ReadArgs {
+    /// Input format (default: from the extension, else the content).
+    #[arg(long, value_name = "FORMAT", value_parser = parse_format)]
+    pub from: Option<Format>,
+    /// How quads become triangles: `paper` = (r1,r2,r3)+(r3,r4,r1), `shortest` = shorter diagonal.
+    #[arg(long, value_name = "RULE", default_value = "paper", value_parser = parse_quad_split)]
+    pub quad_split: QuadSplit,
+}
+
+impl ReadArgs {
+    /// The library's read options.
+    pub fn options(&self) -> crate::io::ReadOptions {
+        crate::io::ReadOptions {
+            format: self.from,
+            quad_split: self.quad_split,
+        }
+    }
+}
+
+fn parse_format(s: &str) -> Result<Format, String> {
+    s.parse()
+}
+
+fn parse_quad_split(s: &str) -> Result<QuadSplit, String> {
+    s.parse()
+}
+
+/// Runs the command line; the binary's `main` calls this.
+pub fn main() -> ExitCode {
+    let cli = Cli::parse();
+    if let Some(n) = cli.jobs {
+        // Only fails if a pool exists already, which cannot happen this early.
+        let _ = rayon::ThreadPoolBuilder::new()
+            .num_threads(usize::from(n))
+            .build_global();
+    }
+    let result = match cli.command {
+        Command::Convert(a) => convert::run(a),
+        Command::Inspect(a) => inspect::run(a),
+        Command::Bench(b) => bench::run(b),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            for cause in e.chain().skip(1) {
+                eprintln!("  caused by: {cause}");
+            }
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// Whether progress bars may be drawn (stderr is a terminal).
+pub fn interactive() -> bool {
+    std::io::stderr().is_terminal()
+}
+
+/// Writes a JSON report atomically (never over an input).
+pub fn write_report<T: serde::Serialize>(
+    path: &std::path::Path,
+    report: &T,
+    inputs: &[&std::path::Path],
+) -> anyhow::Result<()> {
+    crate::io::write_atomic(path, inputs, |w| {
+        serde_json::to_writer_pretty(&mut *w, report)?;
+        std::io::Write::write_all(w, b"\n")
+    })?;
+    Ok(())
+}

@@ -1,0 +1,370 @@
+//! Reading and writing meshes: vertex triples, OBJ, STL and PLY.
+//!
+//! [`read_mesh`] picks the format from `--from`, else the extension, else the content, and
+//! returns an indexed [`TriMesh`] plus a [`ReadInfo`] of what the file held. Readers reject
+//! non-finite coordinates and name the line (text) or byte offset (binary) of every problem.
+//! [`write_mesh`] and [`write_atomic`] write to a temporary file beside the target and rename
+//! it into place, so a failed write never leaves a half-written file, and refuse to overwrite
+//! an input.
+//!
+//! The readers are drapekit's own: tobj 4.0.5, stl_io 0.10 and ply-rs fail or misread files
+//! in `shared/realdata/meshes` (see `READER_PROBE.tsv` there and the README), and their errors
+//! carry no line numbers.
+
+pub mod error;
+pub mod obj;
+pub mod ply;
+pub mod stl;
+mod text;
+pub mod triples;
+
+pub use error::{IoError, Location, Problem, ProblemKind};
+
+use crate::mesh::polygon::{PolygonStats, QuadSplit};
+use crate::mesh::TriMesh;
+use serde::Serialize;
+use std::fmt;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::str::FromStr;
+
+/// A mesh file format.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Format {
+    /// AutoCAD-LISP vertex triples (`.txt`, `.tri`).
+    Triples,
+    /// Wavefront OBJ.
+    Obj,
+    /// STL, ASCII or binary.
+    Stl,
+    /// PLY, ASCII or binary.
+    Ply,
+}
+
+impl FromStr for Format {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s.to_ascii_lowercase().as_str() {
+            "triples" | "txt" | "tri" => Ok(Format::Triples),
+            "obj" => Ok(Format::Obj),
+            "stl" => Ok(Format::Stl),
+            "ply" => Ok(Format::Ply),
+            _ => Err(format!(
+                "unknown format '{s}': expected triples, obj, stl or ply"
+            )),
+        }
+    }
+}
+
+impl fmt::Display for Format {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Format::Triples => "triples",
+            Format::Obj => "obj",
+            Format::Stl => "stl",
+            Format::Ply => "ply",
+        })
+    }
+}
+
+impl Format {
+    /// The format an extension names (`.txt`, `.tri`, `.lsp.txt`, `.obj`, `.stl`, `.ply`, any case).
+    pub fn from_path(path: &Path) -> Option<Format> {
+        let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+        match ext.as_str() {
+            "txt" | "tri" => Some(Format::Triples),
+            "obj" => Some(Format::Obj),
+            "stl" => Some(Format::Stl),
+            "ply" => Some(Format::Ply),
+            _ => None,
+        }
+    }
+
+    /// The format the content shows, if it is unmistakable.
+    pub fn sniff(bytes: &[u8]) -> Option<Format> {
+        if bytes.starts_with(b"ply\n") || bytes.starts_with(b"ply\r\n") {
+            return Some(Format::Ply);
+        }
+        if stl::is_binary(bytes) {
+            return Some(Format::Stl);
+        }
+        let decoded = text::decode(bytes).ok()?;
+        let t: &[u8] = &decoded;
+        if stl::starts_with_solid(t)
+            && t.windows(5)
+                .take(4096)
+                .any(|w| w.eq_ignore_ascii_case(b"facet") || w.eq_ignore_ascii_case(b"endso"))
+        {
+            return Some(Format::Stl);
+        }
+        for (_, line) in text::lines(t).take(1000) {
+            let l = line.trim_ascii();
+            if l.is_empty() || l[0] == b'#' || l[0] == b';' {
+                continue;
+            }
+            let first = text::words(l).next().unwrap_or(l);
+            return match first {
+                b"v" | b"f" | b"vt" | b"vn" | b"o" | b"g" | b"s" | b"mtllib" | b"usemtl" => {
+                    Some(Format::Obj)
+                }
+                _ if l[0].is_ascii_digit() || matches!(l[0], b'-' | b'+' | b'.' | b'(') => {
+                    Some(Format::Triples)
+                }
+                _ => None,
+            };
+        }
+        None
+    }
+}
+
+/// How to read a mesh file.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct ReadOptions {
+    /// The format; `None` decides from the extension, then the content (default).
+    pub format: Option<Format>,
+    /// How quads are split (default: the paper's way).
+    pub quad_split: QuadSplit,
+}
+
+/// What a file held, as read.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct ReadInfo {
+    /// `triples`, `obj`, `stl-ascii`, `stl-binary`, `ply-ascii`, `ply-binary-le`, `ply-binary-be`.
+    pub format: String,
+    /// Vertex-triples layout found.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub layout: Option<String>,
+    /// Points (face corners) read, for formats that list points per face.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub points: Option<usize>,
+    /// Distinct vertices after reading (exact duplicates merged for index-free formats).
+    pub vertices_in_file: usize,
+    /// ASCII STL solids read.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub solids: Option<usize>,
+    /// Face records and their triangulation.
+    pub polygons: PolygonStats,
+    /// What was skipped or odd but not fatal.
+    pub warnings: Vec<String>,
+}
+
+/// A mesh and what its file held.
+#[derive(Debug, Clone)]
+pub struct ReadOutput {
+    /// The mesh, as read (not welded, cleaned or oriented).
+    pub mesh: TriMesh,
+    /// What the file held.
+    pub info: ReadInfo,
+}
+
+/// Reads a mesh file.
+pub fn read_mesh(path: &Path, opts: &ReadOptions) -> Result<ReadOutput, IoError> {
+    let bytes = std::fs::read(path).map_err(|source| IoError::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    read_bytes(path, &bytes, opts)
+}
+
+/// Reads a mesh from bytes; `path` names it in messages and its extension may tell the format.
+pub fn read_bytes(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<ReadOutput, IoError> {
+    if bytes.is_empty() {
+        return Err(IoError::Empty {
+            path: path.to_path_buf(),
+        });
+    }
+    let sniffed = Format::sniff(bytes);
+    let mut note = None;
+    let format = match (opts.format, Format::from_path(path), sniffed) {
+        (Some(f), _, _) => f,
+        // Content that is unmistakably PLY or STL wins over a misleading extension.
+        (None, Some(ext), Some(s)) if ext != s && matches!(s, Format::Ply | Format::Stl) => {
+            note = Some(format!("the extension says {ext} but the content is {s}: read as {s}"));
+            s
+        }
+        (None, Some(ext), _) => ext,
+        (None, None, Some(s)) => s,
+        (None, None, None) => {
+            return Err(IoError::UnknownFormat {
+                path: path.to_path_buf(),
+                reason: "the extension is not .txt/.tri/.obj/.stl/.ply and the content is none of vertex triples, OBJ, STL or PLY".into(),
+            })
+        }
+    };
+    let mut out = match format {
+        Format::Triples => triples::read(path, bytes, opts),
+        Format::Obj => obj::read(path, bytes, opts),
+        Format::Stl => stl::read(path, bytes, opts),
+        Format::Ply => ply::read(path, bytes, opts),
+    }?;
+    if let Some(n) = note {
+        out.info.warnings.insert(0, n);
+    }
+    Ok(out)
+}
+
+/// How to write a mesh file.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct WriteOptions {
+    /// The format; `None` takes it from the extension (default).
+    pub format: Option<Format>,
+    /// ASCII instead of binary for STL and PLY (default false).
+    pub ascii: bool,
+}
+
+/// The format `path` will be written in.
+pub fn output_format(path: &Path, opts: &WriteOptions) -> Result<Format, IoError> {
+    opts.format
+        .or_else(|| Format::from_path(path))
+        .ok_or_else(|| IoError::UnknownOutputFormat {
+            path: path.to_path_buf(),
+            ext: path
+                .extension()
+                .map(|e| e.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+        })
+}
+
+/// Writes `mesh` to `path` atomically, refusing to overwrite any of `inputs`.
+pub fn write_mesh(
+    path: &Path,
+    mesh: &TriMesh,
+    opts: &WriteOptions,
+    inputs: &[&Path],
+) -> Result<Format, IoError> {
+    let format = output_format(path, opts)?;
+    if let Some(v) = mesh
+        .positions
+        .iter()
+        .position(|p| !p.iter().all(|c| c.is_finite()))
+    {
+        return Err(IoError::NonFinite {
+            path: path.to_path_buf(),
+            vertex: v,
+        });
+    }
+    write_atomic(path, inputs, |w| match format {
+        Format::Triples => triples::write(w, mesh),
+        Format::Obj => obj::write(w, mesh),
+        Format::Stl if opts.ascii => stl::write_ascii(w, mesh),
+        Format::Stl => stl::write_binary(w, mesh),
+        Format::Ply => ply::write(w, mesh, opts.ascii),
+    })
+    .map_err(|e| match e {
+        IoError::Write { path, source }
+            if source.get_ref().is_some_and(|s| s.is::<stl::OutOfRange>()) =>
+        {
+            let r = source
+                .into_inner()
+                .unwrap()
+                .downcast::<stl::OutOfRange>()
+                .unwrap();
+            IoError::OutOfFloatRange {
+                path,
+                vertex: r.vertex,
+                value: r.value,
+            }
+        }
+        e => e,
+    })?;
+    Ok(format)
+}
+
+/// Whether two paths name the same existing file.
+pub fn same_file(a: &Path, b: &Path) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        match (std::fs::metadata(a), std::fs::metadata(b)) {
+            (Ok(x), Ok(y)) => x.dev() == y.dev() && x.ino() == y.ino(),
+            _ => false,
+        }
+    }
+    #[cfg(not(unix))]
+    {
+        matches!((a.canonicalize(), b.canonicalize()), (Ok(x), Ok(y)) if x == y)
+    }
+}
+
+/// Writes through `body` into a temporary file beside `path`, then renames it to `path`. On any
+/// error the temporary file is removed and `path` is untouched. Refuses when `path` is one of
+/// `inputs`.
+pub fn write_atomic<F>(path: &Path, inputs: &[&Path], body: F) -> Result<(), IoError>
+where
+    F: FnOnce(&mut BufWriter<&std::fs::File>) -> std::io::Result<()>,
+{
+    for input in inputs {
+        if same_file(path, input) {
+            return Err(IoError::WouldOverwriteInput {
+                path: path.to_path_buf(),
+                input: input.to_path_buf(),
+            });
+        }
+    }
+    let werr = |source: std::io::Error| IoError::Write {
+        path: path.to_path_buf(),
+        source,
+    };
+    let dir: PathBuf = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let tmp = tempfile::Builder::new()
+        .prefix(&format!(".{name}."))
+        .suffix(".tmp")
+        .tempfile_in(&dir)
+        .map_err(werr)?;
+    {
+        let mut w = BufWriter::with_capacity(1 << 20, tmp.as_file());
+        body(&mut w).map_err(werr)?;
+        w.flush().map_err(werr)?;
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        let mode = std::fs::metadata(path)
+            .map(|m| m.permissions().mode())
+            .unwrap_or(0o644);
+        tmp.as_file()
+            .set_permissions(std::fs::Permissions::from_mode(mode))
+            .map_err(werr)?;
+    }
+    tmp.persist(path).map_err(|e| werr(e.error))?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sniffing() {
+        assert_eq!(Format::sniff(b"ply\nformat ascii 1.0\n"), Some(Format::Ply));
+        assert_eq!(Format::sniff(b"# c\nv 0 0 0\n"), Some(Format::Obj));
+        assert_eq!(Format::sniff(b"; lisp\n(0 0 0)\n"), Some(Format::Triples));
+        assert_eq!(
+            Format::sniff(b"solid x\nfacet normal 0 0 1\n"),
+            Some(Format::Stl)
+        );
+        assert_eq!(Format::sniff(b"hello world\n"), None);
+    }
+
+    #[test]
+    fn atomic_write_leaves_nothing_on_failure() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("o.obj");
+        std::fs::write(&out, b"old").unwrap();
+        let r = write_atomic(&out, &[], |w| {
+            w.write_all(b"partial")?;
+            Err(std::io::Error::other("boom"))
+        });
+        assert!(r.is_err());
+        assert_eq!(std::fs::read(&out).unwrap(), b"old");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+}

@@ -1,0 +1,284 @@
+//! Wavefront OBJ: `v` positions and `f` faces; everything else is read past.
+//!
+//! Read: `v x y z [w | r g b]` (the first three numbers), `f` corners as `v`, `v/vt`, `v/vt/vn`
+//! or `v//vn`, with 1-based indices; a negative index counts back from the vertices read so far
+//! (`-1` is the last one); a positive index may refer to a vertex defined later in the file.
+//! Lines ending in `\` continue on the next. Texture coordinates, normals, groups, objects,
+//! smoothing groups and materials (`usemtl` with any name, even none) are skipped; `l` and `p`
+//! elements and free-form geometry are skipped with a warning. UTF-8 (with or without a
+//! byte-order mark) and UTF-16 files are read. N-gons, concave ones included, are ear-clipped
+//! (see `mesh::polygon`).
+//!
+//! Written: `v x y z` with each number in its shortest exact form, then `f a b c` (1-based).
+
+use super::error::{IoError, Location, ProblemKind, Problems};
+use super::text::{self, show, words};
+use super::{ReadInfo, ReadOptions, ReadOutput};
+use crate::math::Point3;
+use crate::mesh::polygon::{triangulate, PolygonStats};
+use crate::mesh::TriMesh;
+use std::collections::BTreeMap;
+use std::io::Write;
+use std::path::Path;
+
+const FORMAT: &str = "OBJ";
+
+/// Statements skipped without comment.
+const SKIPPED: &[&[u8]] = &[
+    b"vt",
+    b"vn",
+    b"vp",
+    b"o",
+    b"g",
+    b"s",
+    b"usemtl",
+    b"mtllib",
+    b"usemap",
+    b"maplib",
+    b"lod",
+    b"bevel",
+    b"c_interp",
+    b"d_interp",
+    b"shadow_obj",
+    b"trace_obj",
+    b"mg",
+];
+/// Free-form geometry statements, skipped with a warning.
+const FREEFORM: &[&[u8]] = &[
+    b"cstype", b"deg", b"bmat", b"step", b"curv", b"curv2", b"surf", b"parm", b"trim", b"hole",
+    b"scrv", b"sp", b"end", b"con", b"ctech", b"stech",
+];
+
+/// Reads OBJ from `bytes` (`path` names the file in messages).
+pub fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<ReadOutput, IoError> {
+    let text = text::decode(bytes).map_err(|reason| {
+        super::error::malformed(
+            path,
+            FORMAT,
+            Location::File,
+            ProblemKind::Encoding { reason },
+        )
+    })?;
+    let mut problems = Problems::default();
+    let mut positions: Vec<Point3> = Vec::new();
+    // Faces: corner indices (0-based, maybe past the end until checked) and their line.
+    let mut corners: Vec<i64> = Vec::new();
+    let mut face_start: Vec<(usize, u64)> = Vec::new();
+    let mut skipped: BTreeMap<String, (usize, u64)> = BTreeMap::new();
+    let mut logical: Vec<u8> = Vec::new();
+    let mut all_lines = text::lines(&text).peekable();
+    while let Some((ln, raw)) = all_lines.next() {
+        // Join continuation lines; the statement keeps the number of its first line.
+        let line: &[u8] = if raw.trim_ascii_end().ends_with(b"\\") {
+            logical.clear();
+            let mut part = raw;
+            loop {
+                let t = part.trim_ascii_end();
+                if let Some(stripped) = t.strip_suffix(b"\\") {
+                    logical.extend_from_slice(stripped);
+                    logical.push(b' ');
+                    match all_lines.next() {
+                        Some((_, next)) => part = next,
+                        None => break,
+                    }
+                } else {
+                    logical.extend_from_slice(part);
+                    break;
+                }
+            }
+            &logical
+        } else {
+            raw
+        };
+        let line = match line.iter().position(|&b| b == b'#') {
+            Some(i) => &line[..i],
+            None => line,
+        };
+        let mut w = words(line);
+        let Some(key) = w.next() else { continue };
+        match key {
+            b"v" => {
+                let mut xyz = [0.0; 3];
+                let mut found = 0;
+                let mut bad = false;
+                for tok in w.by_ref().take(3) {
+                    match text::number(tok) {
+                        Ok(v) => xyz[found] = v,
+                        Err(k) => {
+                            problems.line(ln, k);
+                            bad = true;
+                        }
+                    }
+                    found += 1;
+                }
+                if found < 3 {
+                    problems.line(ln, ProblemKind::TooFewCoordinates { found });
+                } else if !bad {
+                    positions.push(Point3::new(xyz[0], xyz[1], xyz[2]));
+                } else {
+                    positions.push(Point3::origin());
+                }
+            }
+            b"f" | b"fo" => {
+                let start = corners.len();
+                let count = positions.len() as i64;
+                let before = problems.count();
+                for tok in w {
+                    let idx = tok.split(|&b| b == b'/').next().unwrap_or(tok);
+                    match std::str::from_utf8(idx)
+                        .ok()
+                        .and_then(|s| s.parse::<i64>().ok())
+                    {
+                        Some(0) => problems.line(ln, ProblemKind::ZeroIndex),
+                        Some(i) if i < 0 => {
+                            if count + i < 0 {
+                                problems.line(
+                                    ln,
+                                    ProblemKind::IndexOutOfRange {
+                                        index: i,
+                                        count: count as u64,
+                                    },
+                                );
+                            }
+                            corners.push(count + i);
+                        }
+                        Some(i) => corners.push(i - 1),
+                        None => problems.line(ln, ProblemKind::BadIndex { token: show(tok) }),
+                    }
+                }
+                let found = corners.len() - start;
+                if problems.count() != before {
+                    corners.truncate(start);
+                } else if found < 3 {
+                    problems.line(ln, ProblemKind::TooFewCorners { found });
+                    corners.truncate(start);
+                } else {
+                    face_start.push((start, ln));
+                }
+            }
+            k if SKIPPED.contains(&k) => {}
+            k => {
+                let name = if FREEFORM.contains(&k) {
+                    "free-form geometry".to_string()
+                } else {
+                    format!("'{}'", show(k))
+                };
+                let e = skipped.entry(name).or_insert((0, ln));
+                e.0 += 1;
+            }
+        }
+    }
+    problems.check(path, FORMAT)?;
+    let n = positions.len() as i64;
+    let mut problems = Problems::default();
+    for (k, &(start, ln)) in face_start.iter().enumerate() {
+        let end = face_start.get(k + 1).map_or(corners.len(), |s| s.0);
+        for &c in &corners[start..end] {
+            if c >= n {
+                problems.line(
+                    ln,
+                    ProblemKind::IndexOutOfRange {
+                        index: c + 1,
+                        count: n as u64,
+                    },
+                );
+            }
+        }
+    }
+    problems.check(path, FORMAT)?;
+    if positions.len() >= u32::MAX as usize {
+        return Err(IoError::TooLarge {
+            path: path.to_path_buf(),
+            count: positions.len() as u64,
+        });
+    }
+    let mut faces = Vec::with_capacity(face_start.len());
+    let mut stats = PolygonStats::default();
+    let mut ring: Vec<u32> = Vec::new();
+    for (k, &(start, _)) in face_start.iter().enumerate() {
+        let end = face_start.get(k + 1).map_or(corners.len(), |s| s.0);
+        ring.clear();
+        ring.extend(corners[start..end].iter().map(|&c| c as u32));
+        triangulate(&positions, &ring, opts.quad_split, &mut faces, &mut stats);
+    }
+    let warnings = skipped
+        .iter()
+        .map(|(name, (count, line))| match name.as_str() {
+            "'l'" => format!("{count} line element(s) (l) skipped, first at line {line}"),
+            "'p'" => format!("{count} point element(s) (p) skipped, first at line {line}"),
+            _ => format!("{count} unknown statement(s) {name} skipped, first at line {line}"),
+        })
+        .collect();
+    let info = ReadInfo {
+        format: FORMAT.to_lowercase(),
+        vertices_in_file: positions.len(),
+        polygons: stats,
+        warnings,
+        ..ReadInfo::default()
+    };
+    Ok(ReadOutput {
+        mesh: TriMesh::new(positions, faces),
+        info,
+    })
+}
+
+/// Writes `mesh` as OBJ.
+pub fn write(w: &mut impl Write, mesh: &TriMesh) -> std::io::Result<()> {
+    writeln!(
+        w,
+        "# drapekit: {} vertices, {} triangles",
+        mesh.positions.len(),
+        mesh.faces.len()
+    )?;
+    for p in &mesh.positions {
+        writeln!(w, "v {:?} {:?} {:?}", p.x, p.y, p.z)?;
+    }
+    for f in &mesh.faces {
+        writeln!(w, "f {} {} {}", f[0] + 1, f[1] + 1, f[2] + 1)?;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn read_str(s: &str) -> Result<ReadOutput, IoError> {
+        read(Path::new("m.obj"), s.as_bytes(), &ReadOptions::default())
+    }
+
+    #[test]
+    fn negative_and_forward_indices() {
+        let r = read_str("v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\nf 1 2 4\nv 1 1 0\n").unwrap();
+        assert_eq!(r.mesh.faces, vec![[0, 1, 2], [0, 1, 3]]);
+    }
+
+    #[test]
+    fn continuation_and_slashes() {
+        let r = read_str("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/1/1 \\\n 2//2 3/3\n").unwrap();
+        assert_eq!(r.mesh.faces, vec![[0, 1, 2]]);
+    }
+
+    #[test]
+    fn all_problems_reported() {
+        let e = read_str("v 0 0 0\nv 1 0\nf 1 2 9\nf 0 1 2\nf 1 2\n")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("m.obj:2: a vertex needs 3 coordinates, found 2"),
+            "{e}"
+        );
+        assert!(e.contains("m.obj:4: vertex index 0 is invalid"), "{e}");
+        assert!(
+            e.contains("m.obj:5: a face needs at least 3 corners, found 2"),
+            "{e}"
+        );
+        let e = read_str("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n")
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            e,
+            "m.obj:4: vertex index 9 is out of range: the file has 3 vertices"
+        );
+    }
+}

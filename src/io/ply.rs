@@ -1,0 +1,834 @@
+//! PLY: ASCII, binary little-endian and binary big-endian.
+//!
+//! Header: `ply`, a `format` line, then `element NAME COUNT` lines each followed by its
+//! `property TYPE NAME` or `property list COUNT_TYPE ITEM_TYPE NAME` lines, `comment` and
+//! `obj_info` lines anywhere, and `end_header`. Types: `char uchar short ushort int uint float
+//! double` and their sized names (`int8` ... `float64`). Header lines end in LF or CRLF; a header
+//! line that is none of these (Blender 2.47 writes a bare "Created by ..." line) is skipped with
+//! a warning. The binary body starts right after the line end of `end_header`, even if its first
+//! byte is a newline.
+//!
+//! Geometry comes from the `vertex` element's `x y z` (any numeric type) and the `face` element's
+//! `vertex_indices` (or `vertex_index`) list. Every other element and property, list properties
+//! on the vertex element included, is read past. Faces of four or more corners are triangulated
+//! (see `mesh::polygon`).
+//!
+//! Written: `double` coordinates and `uchar`-counted `int` index lists, binary little-endian by
+//! default, ASCII on request (shortest exact numbers).
+
+use super::error::{malformed, IoError, Location, ProblemKind, Problems};
+use super::text::{self, show};
+use super::{ReadInfo, ReadOptions, ReadOutput};
+use crate::math::Point3;
+use crate::mesh::polygon::{triangulate, PolygonStats};
+use crate::mesh::TriMesh;
+use std::io::Write;
+use std::path::Path;
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Scalar {
+    I8,
+    U8,
+    I16,
+    U16,
+    I32,
+    U32,
+    F32,
+    F64,
+}
+
+impl Scalar {
+    fn parse(s: &[u8]) -> Option<Scalar> {
+        Some(match s {
+            b"char" | b"int8" => Scalar::I8,
+            b"uchar" | b"uint8" => Scalar::U8,
+            b"short" | b"int16" => Scalar::I16,
+            b"ushort" | b"uint16" => Scalar::U16,
+            b"int" | b"int32" => Scalar::I32,
+            b"uint" | b"uint32" => Scalar::U32,
+            b"float" | b"float32" => Scalar::F32,
+            b"double" | b"float64" => Scalar::F64,
+            _ => return None,
+        })
+    }
+
+    fn size(self) -> usize {
+        match self {
+            Scalar::I8 | Scalar::U8 => 1,
+            Scalar::I16 | Scalar::U16 => 2,
+            Scalar::I32 | Scalar::U32 | Scalar::F32 => 4,
+            Scalar::F64 => 8,
+        }
+    }
+
+    fn is_float(self) -> bool {
+        matches!(self, Scalar::F32 | Scalar::F64)
+    }
+
+    fn name(self) -> &'static str {
+        match self {
+            Scalar::I8 => "char",
+            Scalar::U8 => "uchar",
+            Scalar::I16 => "short",
+            Scalar::U16 => "ushort",
+            Scalar::I32 => "int",
+            Scalar::U32 => "uint",
+            Scalar::F32 => "float",
+            Scalar::F64 => "double",
+        }
+    }
+
+    fn range(self) -> (f64, f64) {
+        match self {
+            Scalar::I8 => (i8::MIN as f64, i8::MAX as f64),
+            Scalar::U8 => (0.0, u8::MAX as f64),
+            Scalar::I16 => (i16::MIN as f64, i16::MAX as f64),
+            Scalar::U16 => (0.0, u16::MAX as f64),
+            Scalar::I32 => (i32::MIN as f64, i32::MAX as f64),
+            Scalar::U32 => (0.0, u32::MAX as f64),
+            Scalar::F32 | Scalar::F64 => (f64::NEG_INFINITY, f64::INFINITY),
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum PropType {
+    Scalar(Scalar),
+    List(Scalar, Scalar),
+}
+
+#[derive(Debug, Clone)]
+struct Property {
+    name: String,
+    ty: PropType,
+}
+
+#[derive(Debug, Clone)]
+struct Element {
+    name: String,
+    count: u64,
+    props: Vec<Property>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Encoding {
+    Ascii,
+    Little,
+    Big,
+}
+
+struct Header {
+    encoding: Encoding,
+    elements: Vec<Element>,
+    body: usize,
+    lines: u64,
+    warnings: Vec<String>,
+}
+
+fn parse_header(bytes: &[u8]) -> Result<Header, (Location, ProblemKind)> {
+    let mut pos = 0usize;
+    let mut line_no = 0u64;
+    let mut next_line = |pos: &mut usize| -> Option<(u64, &[u8])> {
+        if *pos >= bytes.len() {
+            return None;
+        }
+        let rest = &bytes[*pos..];
+        let end = rest.iter().position(|&b| b == b'\n');
+        let (line, adv) = match end {
+            Some(e) => (&rest[..e], e + 1),
+            None => (rest, rest.len()),
+        };
+        *pos += adv;
+        line_no += 1;
+        Some((line_no, line.strip_suffix(b"\r").unwrap_or(line)))
+    };
+    match next_line(&mut pos) {
+        Some((_, l)) if l.trim_ascii() == b"ply" => {}
+        _ => return Err((Location::Line(1), ProblemKind::PlyMagic)),
+    }
+    let mut encoding = None;
+    let mut elements: Vec<Element> = Vec::new();
+    let mut warnings = Vec::new();
+    let header_err = |l: &[u8], reason: &str| ProblemKind::PlyHeader {
+        line: show(l),
+        reason: reason.into(),
+    };
+    loop {
+        let Some((ln, line)) = next_line(&mut pos) else {
+            return Err((Location::File, ProblemKind::PlyNoEnd));
+        };
+        let w: Vec<&[u8]> = text::words(line).collect();
+        match w.first().copied() {
+            None => {}
+            Some(b"end_header") => break,
+            Some(b"comment") | Some(b"obj_info") => {}
+            Some(b"format") => {
+                encoding = Some(match (w.get(1).copied(), w.get(2).copied()) {
+                    (Some(b"ascii"), Some(b"1.0")) => Encoding::Ascii,
+                    (Some(b"binary_little_endian"), Some(b"1.0")) => Encoding::Little,
+                    (Some(b"binary_big_endian"), Some(b"1.0")) => Encoding::Big,
+                    _ => {
+                        return Err((
+                            Location::Line(ln),
+                            ProblemKind::PlyFormat { found: show(line) },
+                        ))
+                    }
+                });
+            }
+            Some(b"element") => {
+                if w.len() != 3 {
+                    return Err((
+                        Location::Line(ln),
+                        header_err(line, "expected 'element NAME COUNT'"),
+                    ));
+                }
+                let count = std::str::from_utf8(w[2])
+                    .ok()
+                    .and_then(|s| s.parse::<u64>().ok());
+                let Some(count) = count else {
+                    return Err((
+                        Location::Line(ln),
+                        header_err(line, "the element count is not a whole number"),
+                    ));
+                };
+                elements.push(Element {
+                    name: String::from_utf8_lossy(w[1]).into_owned(),
+                    count,
+                    props: Vec::new(),
+                });
+            }
+            Some(b"property") => {
+                let Some(el) = elements.last_mut() else {
+                    return Err((
+                        Location::Line(ln),
+                        header_err(line, "a property before any element"),
+                    ));
+                };
+                let (ty, name) = if w.get(1).copied() == Some(b"list") {
+                    if w.len() != 5 {
+                        return Err((
+                            Location::Line(ln),
+                            header_err(line, "expected 'property list COUNT_TYPE ITEM_TYPE NAME'"),
+                        ));
+                    }
+                    let c = Scalar::parse(w[2]).ok_or((
+                        Location::Line(ln),
+                        ProblemKind::PlyType { found: show(w[2]) },
+                    ))?;
+                    let i = Scalar::parse(w[3]).ok_or((
+                        Location::Line(ln),
+                        ProblemKind::PlyType { found: show(w[3]) },
+                    ))?;
+                    if c.is_float() {
+                        return Err((
+                            Location::Line(ln),
+                            header_err(line, "a list count must have an integer type"),
+                        ));
+                    }
+                    (PropType::List(c, i), w[4])
+                } else {
+                    if w.len() != 3 {
+                        return Err((
+                            Location::Line(ln),
+                            header_err(line, "expected 'property TYPE NAME'"),
+                        ));
+                    }
+                    let t = Scalar::parse(w[1]).ok_or((
+                        Location::Line(ln),
+                        ProblemKind::PlyType { found: show(w[1]) },
+                    ))?;
+                    (PropType::Scalar(t), w[2])
+                };
+                el.props.push(Property {
+                    name: String::from_utf8_lossy(name).into_owned(),
+                    ty,
+                });
+            }
+            Some(_) => warnings.push(format!(
+                "header line {ln} skipped: '{}' is not a PLY header keyword",
+                show(line)
+            )),
+        }
+    }
+    let Some(encoding) = encoding else {
+        return Err((
+            Location::Line(2),
+            ProblemKind::PlyFormat {
+                found: "(no format line)".into(),
+            },
+        ));
+    };
+    Ok(Header {
+        encoding,
+        elements,
+        body: pos,
+        lines: line_no,
+        warnings,
+    })
+}
+
+/// The roles of an element's properties for geometry.
+struct Roles {
+    xyz: Option<[usize; 3]>,
+    indices: Option<usize>,
+}
+
+fn roles(el: &Element) -> Roles {
+    let find = |n: &str| {
+        el.props
+            .iter()
+            .position(|p| p.name == n && matches!(p.ty, PropType::Scalar(_)))
+    };
+    let xyz = match (el.name.as_str(), find("x"), find("y"), find("z")) {
+        ("vertex", Some(x), Some(y), Some(z)) => Some([x, y, z]),
+        _ => None,
+    };
+    let indices = if el.name == "face" {
+        let list = |n: &str| {
+            el.props
+                .iter()
+                .position(|p| p.name == n && matches!(p.ty, PropType::List(..)))
+        };
+        list("vertex_indices").or_else(|| list("vertex_index"))
+    } else {
+        None
+    };
+    Roles { xyz, indices }
+}
+
+/// Reads PLY from `bytes` (`path` names the file in messages).
+pub fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<ReadOutput, IoError> {
+    const FMT: &str = "PLY";
+    let header = parse_header(bytes).map_err(|(at, kind)| malformed(path, FMT, at, kind))?;
+    let mut warnings = header.warnings.clone();
+    for el in &header.elements {
+        if el.name == "vertex" {
+            for c in ["x", "y", "z"] {
+                if !el
+                    .props
+                    .iter()
+                    .any(|p| p.name == c && matches!(p.ty, PropType::Scalar(_)))
+                {
+                    return Err(malformed(
+                        path,
+                        FMT,
+                        Location::File,
+                        ProblemKind::PlyMissingProperty { name: c.into() },
+                    ));
+                }
+            }
+        }
+        if el.name == "face" && el.count > 0 && roles(el).indices.is_none() {
+            warnings.push("the face element has no 'vertex_indices' list: faces skipped".into());
+        }
+        if !matches!(el.name.as_str(), "vertex" | "face") && el.count > 0 {
+            warnings.push(format!("{} '{}' element(s) skipped", el.count, el.name));
+        }
+    }
+    let body = &bytes[header.body..];
+    let mut positions: Vec<Point3> = Vec::new();
+    let mut corners: Vec<i64> = Vec::new();
+    let mut face_start: Vec<(usize, Location)> = Vec::new();
+    let mut reader: Box<dyn ValueSource> = match header.encoding {
+        Encoding::Ascii => Box::new(AsciiSource {
+            text: body,
+            pos: 0,
+            line: header.lines,
+            tokens: Vec::new(),
+            next: 0,
+        }),
+        e => Box::new(BinarySource {
+            bytes: body,
+            pos: 0,
+            base: header.body as u64,
+            big: e == Encoding::Big,
+        }),
+    };
+    let mut extra_lines = 0u64;
+    let mut missing_lists = 0u64;
+    for el in &header.elements {
+        let r = roles(el);
+        // Don't trust the count for allocation beyond what the file could hold.
+        let cap = (el.count as usize).min(body.len() / 2 + 1);
+        if r.xyz.is_some() {
+            positions.reserve(cap);
+        }
+        if r.indices.is_some() {
+            face_start.reserve(cap);
+            corners.reserve(cap.saturating_mul(3));
+        }
+        // Values a record needs at least: each scalar, and each list's length.
+        let needed = el.props.len();
+        let mut vals = [0.0f64; 3];
+        for i in 0..el.count {
+            let at = reader.location(&el.name, i);
+            let short = || {
+                malformed(
+                    path,
+                    FMT,
+                    at.clone(),
+                    ProblemKind::PlyShort {
+                        element: el.name.clone(),
+                        index: i,
+                        count: el.count,
+                    },
+                )
+            };
+            if !reader.begin_record() {
+                return Err(short());
+            }
+            let mut read_values = 0usize;
+            for (k, p) in el.props.iter().enumerate() {
+                let fail = |e: ValueError, read_values: usize| match e {
+                    ValueError::End => short(),
+                    ValueError::LineEnd => malformed(
+                        path,
+                        FMT,
+                        at.clone(),
+                        ProblemKind::PlyValueCount {
+                            element: el.name.clone(),
+                            index: i,
+                            found: read_values,
+                            needed,
+                        },
+                    ),
+                    ValueError::Bad(at, kind) => malformed(path, FMT, at, kind),
+                };
+                match p.ty {
+                    PropType::Scalar(t) => {
+                        let v = reader.value(t).map_err(|e| fail(e, read_values))?;
+                        read_values += 1;
+                        if let Some(xyz) = r.xyz {
+                            if let Some(c) = xyz.iter().position(|&x| x == k) {
+                                if !v.is_finite() {
+                                    return Err(malformed(
+                                        path,
+                                        FMT,
+                                        at.clone(),
+                                        ProblemKind::BinaryNonFinite { value: v },
+                                    ));
+                                }
+                                vals[c] = v;
+                            }
+                        }
+                    }
+                    PropType::List(ct, it) => {
+                        let n = match reader.value(ct) {
+                            Ok(n) => n,
+                            // A line that stops exactly where trailing lists begin: read them as empty.
+                            Err(ValueError::LineEnd)
+                                if el.props[k..]
+                                    .iter()
+                                    .all(|q| matches!(q.ty, PropType::List(..))) =>
+                            {
+                                missing_lists += 1;
+                                break;
+                            }
+                            Err(e) => return Err(fail(e, read_values)),
+                        };
+                        read_values += 1;
+                        if n < 0.0 {
+                            return Err(malformed(
+                                path,
+                                FMT,
+                                at.clone(),
+                                ProblemKind::NegativeCount { count: n as i64 },
+                            ));
+                        }
+                        let n = n as usize;
+                        let is_faces = r.indices == Some(k);
+                        let start = corners.len();
+                        for _ in 0..n {
+                            let v = reader.value(it).map_err(|e| fail(e, read_values))?;
+                            read_values += 1;
+                            if is_faces {
+                                corners.push(v as i64);
+                            }
+                        }
+                        if is_faces {
+                            if n < 3 {
+                                return Err(malformed(
+                                    path,
+                                    FMT,
+                                    at.clone(),
+                                    ProblemKind::TooFewCorners { found: n },
+                                ));
+                            }
+                            face_start.push((start, at.clone()));
+                        }
+                    }
+                }
+            }
+            extra_lines += u64::from(reader.end_record());
+            if r.xyz.is_some() {
+                positions.push(Point3::new(vals[0], vals[1], vals[2]));
+            }
+        }
+    }
+    if extra_lines > 0 {
+        warnings.push(format!(
+            "{extra_lines} line(s) hold values beyond the header's properties (ignored)"
+        ));
+    }
+    if missing_lists > 0 {
+        warnings.push(format!("{missing_lists} line(s) end before the header's trailing list properties (read as empty lists)"));
+    }
+    if let Some(extra) = reader.leftover() {
+        warnings.push(extra);
+    }
+    let n = positions.len() as i64;
+    let mut problems = Problems::default();
+    for (k, (start, at)) in face_start.iter().enumerate() {
+        let end = face_start.get(k + 1).map_or(corners.len(), |s| s.0);
+        for &c in &corners[*start..end] {
+            if c < 0 || c >= n {
+                problems.push(
+                    at.clone(),
+                    ProblemKind::IndexOutOfRange {
+                        index: c,
+                        count: n as u64,
+                    },
+                );
+            }
+        }
+    }
+    problems.check(path, FMT)?;
+    if positions.len() >= u32::MAX as usize {
+        return Err(IoError::TooLarge {
+            path: path.to_path_buf(),
+            count: positions.len() as u64,
+        });
+    }
+    let mut faces = Vec::with_capacity(face_start.len());
+    let mut stats = PolygonStats::default();
+    let mut ring = Vec::new();
+    for (k, (start, _)) in face_start.iter().enumerate() {
+        let end = face_start.get(k + 1).map_or(corners.len(), |s| s.0);
+        ring.clear();
+        ring.extend(corners[*start..end].iter().map(|&c| c as u32));
+        triangulate(&positions, &ring, opts.quad_split, &mut faces, &mut stats);
+    }
+    let info = ReadInfo {
+        format: match header.encoding {
+            Encoding::Ascii => "ply-ascii",
+            Encoding::Little => "ply-binary-le",
+            Encoding::Big => "ply-binary-be",
+        }
+        .into(),
+        vertices_in_file: positions.len(),
+        polygons: stats,
+        warnings,
+        ..ReadInfo::default()
+    };
+    Ok(ReadOutput {
+        mesh: TriMesh::new(positions, faces),
+        info,
+    })
+}
+
+enum ValueError {
+    /// The file ended.
+    End,
+    /// The record's line ended (ASCII).
+    LineEnd,
+    /// A value that is not of its type.
+    Bad(Location, ProblemKind),
+}
+
+/// Where property values come from: ASCII lines (one element per line) or binary bytes.
+trait ValueSource {
+    /// Starts the next element record; false at the end of the file.
+    fn begin_record(&mut self) -> bool;
+    /// The next value of type `t`.
+    fn value(&mut self, t: Scalar) -> Result<f64, ValueError>;
+    /// Ends a record; true when it held values beyond the properties (ASCII).
+    fn end_record(&mut self) -> bool;
+    /// Where the next record starts.
+    fn location(&self, element: &str, index: u64) -> Location;
+    /// A note on anything after the last element.
+    fn leftover(&mut self) -> Option<String>;
+}
+
+struct AsciiSource<'a> {
+    text: &'a [u8],
+    pos: usize,
+    /// Line number of the current record.
+    line: u64,
+    tokens: Vec<(usize, usize)>,
+    next: usize,
+}
+
+impl AsciiSource<'_> {
+    /// The next non-blank line: its number and token spans; advances past it.
+    fn next_line(&mut self) -> Option<(u64, Vec<(usize, usize)>)> {
+        let t = self.text;
+        let mut line = self.line;
+        while self.pos < t.len() {
+            line += 1;
+            let start = self.pos;
+            let end = t[start..]
+                .iter()
+                .position(|&b| b == b'\n')
+                .map_or(t.len(), |e| start + e);
+            self.pos = (end + 1).min(t.len());
+            let mut spans = Vec::new();
+            let mut i = start;
+            while i < end {
+                while i < end && t[i].is_ascii_whitespace() {
+                    i += 1;
+                }
+                let s0 = i;
+                while i < end && !t[i].is_ascii_whitespace() {
+                    i += 1;
+                }
+                if i > s0 {
+                    spans.push((s0, i));
+                }
+            }
+            if !spans.is_empty() {
+                return Some((line, spans));
+            }
+        }
+        self.line = line;
+        None
+    }
+}
+
+impl ValueSource for AsciiSource<'_> {
+    fn begin_record(&mut self) -> bool {
+        match self.next_line() {
+            Some((line, tokens)) => {
+                self.line = line;
+                self.tokens = tokens;
+                self.next = 0;
+                true
+            }
+            None => false,
+        }
+    }
+
+    fn value(&mut self, t: Scalar) -> Result<f64, ValueError> {
+        let Some(&(a, b)) = self.tokens.get(self.next) else {
+            return Err(ValueError::LineEnd);
+        };
+        self.next += 1;
+        let tok = &self.text[a..b];
+        let at = Location::Line(self.line);
+        if t.is_float() {
+            // Non-finite values are caught by the caller where they matter (coordinates).
+            return std::str::from_utf8(tok)
+                .ok()
+                .and_then(|x| x.parse::<f64>().ok())
+                .ok_or_else(|| ValueError::Bad(at, ProblemKind::NotANumber { token: show(tok) }));
+        }
+        let v = std::str::from_utf8(tok).ok().and_then(|x| {
+            x.parse::<i64>()
+                .ok()
+                .map(|i| i as f64)
+                .or_else(|| x.parse::<f64>().ok().filter(|f| f.fract() == 0.0))
+        });
+        let (lo, hi) = t.range();
+        match v {
+            Some(v) if v >= lo && v <= hi => Ok(v),
+            _ => Err(ValueError::Bad(
+                at,
+                ProblemKind::BadInteger {
+                    token: show(tok),
+                    ty: t.name().into(),
+                },
+            )),
+        }
+    }
+
+    fn end_record(&mut self) -> bool {
+        self.next < self.tokens.len()
+    }
+
+    fn location(&self, _: &str, _: u64) -> Location {
+        // The line of the next record.
+        let mut line = self.line;
+        let mut at_line_start = true;
+        for &b in &self.text[self.pos..] {
+            if at_line_start {
+                line += 1;
+                at_line_start = false;
+            }
+            if b == b'\n' {
+                at_line_start = true;
+            } else if !b.is_ascii_whitespace() {
+                return Location::Line(line);
+            }
+        }
+        Location::Line(line + u64::from(at_line_start))
+    }
+
+    fn leftover(&mut self) -> Option<String> {
+        let mut n = 0;
+        while self.next_line().is_some() {
+            n += 1;
+        }
+        (n > 0).then(|| format!("{n} line(s) after the last element ignored"))
+    }
+}
+
+struct BinarySource<'a> {
+    bytes: &'a [u8],
+    pos: usize,
+    base: u64,
+    big: bool,
+}
+
+impl ValueSource for BinarySource<'_> {
+    fn begin_record(&mut self) -> bool {
+        true
+    }
+
+    fn end_record(&mut self) -> bool {
+        false
+    }
+
+    #[inline]
+    fn value(&mut self, t: Scalar) -> Result<f64, ValueError> {
+        let n = t.size();
+        if self.pos + n > self.bytes.len() {
+            return Err(ValueError::End);
+        }
+        let b = &self.bytes[self.pos..self.pos + n];
+        self.pos += n;
+        macro_rules! get {
+            ($ty:ty) => {{
+                let a = b.try_into().unwrap();
+                if self.big {
+                    <$ty>::from_be_bytes(a) as f64
+                } else {
+                    <$ty>::from_le_bytes(a) as f64
+                }
+            }};
+        }
+        Ok(match t {
+            Scalar::I8 => b[0] as i8 as f64,
+            Scalar::U8 => b[0] as f64,
+            Scalar::I16 => get!(i16),
+            Scalar::U16 => get!(u16),
+            Scalar::I32 => get!(i32),
+            Scalar::U32 => get!(u32),
+            Scalar::F32 => get!(f32),
+            Scalar::F64 => get!(f64),
+        })
+    }
+
+    fn location(&self, element: &str, index: u64) -> Location {
+        Location::Byte {
+            offset: self.base + self.pos as u64,
+            record: format!("element '{element}' {index}"),
+        }
+    }
+
+    fn leftover(&mut self) -> Option<String> {
+        let rest = self.bytes.len() - self.pos;
+        (rest > 0).then(|| format!("{rest} byte(s) after the last element ignored"))
+    }
+}
+
+/// Writes PLY: binary little-endian, or ASCII.
+pub fn write(w: &mut impl Write, mesh: &TriMesh, ascii: bool) -> std::io::Result<()> {
+    let index_type = if mesh.positions.len() > i32::MAX as usize {
+        "uint"
+    } else {
+        "int"
+    };
+    write!(
+        w,
+        "ply\nformat {} 1.0\ncomment drapekit\nelement vertex {}\nproperty double x\nproperty double y\nproperty double z\nelement face {}\nproperty list uchar {index_type} vertex_indices\nend_header\n",
+        if ascii { "ascii" } else { "binary_little_endian" },
+        mesh.positions.len(),
+        mesh.faces.len()
+    )?;
+    if ascii {
+        for p in &mesh.positions {
+            writeln!(w, "{:?} {:?} {:?}", p.x, p.y, p.z)?;
+        }
+        for f in &mesh.faces {
+            writeln!(w, "3 {} {} {}", f[0], f[1], f[2])?;
+        }
+    } else {
+        let mut buf = Vec::with_capacity(1 << 16);
+        for p in &mesh.positions {
+            for k in 0..3 {
+                buf.extend_from_slice(&p[k].to_le_bytes());
+            }
+            if buf.len() >= 1 << 16 {
+                w.write_all(&buf)?;
+                buf.clear();
+            }
+        }
+        for f in &mesh.faces {
+            buf.push(3);
+            for &v in f {
+                buf.extend_from_slice(&v.to_le_bytes());
+            }
+            if buf.len() >= 1 << 16 {
+                w.write_all(&buf)?;
+                buf.clear();
+            }
+        }
+        w.write_all(&buf)?;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn read_bytes(b: &[u8]) -> Result<ReadOutput, IoError> {
+        read(Path::new("p.ply"), b, &ReadOptions::default())
+    }
+
+    #[test]
+    fn round_trip_both_encodings() {
+        let m = crate::mesh::generate::icosphere(1);
+        for ascii in [false, true] {
+            let mut buf = Vec::new();
+            write(&mut buf, &m, ascii).unwrap();
+            assert_eq!(read_bytes(&buf).unwrap().mesh, m);
+        }
+    }
+
+    #[test]
+    fn big_endian_with_extra_properties_and_odd_header() {
+        let mut b = b"ply\r\nformat binary_big_endian 1.0\r\nCreated by hand\r\nelement vertex 3\r\ncomment between\r\nproperty float x\r\nproperty float y\r\nproperty float z\r\nproperty list uchar int junk\r\nelement face 1\r\nproperty list uchar uint vertex_index\r\nend_header\r\n".to_vec();
+        for (i, p) in [[0f32, 0., 0.], [1., 0., 0.], [0., 1., 0.]]
+            .iter()
+            .enumerate()
+        {
+            for v in p {
+                b.extend_from_slice(&v.to_be_bytes());
+            }
+            b.push(1);
+            b.extend_from_slice(&(i as i32).to_be_bytes());
+        }
+        b.push(3);
+        for i in [0u32, 1, 2] {
+            b.extend_from_slice(&i.to_be_bytes());
+        }
+        let r = read_bytes(&b).unwrap();
+        assert_eq!(r.mesh.faces, vec![[0, 1, 2]]);
+        assert_eq!(r.mesh.positions[1], Point3::new(1.0, 0.0, 0.0));
+        assert!(r.info.warnings[0].contains("header line 3 skipped"));
+    }
+
+    #[test]
+    fn short_body_and_bad_index() {
+        let e = read_bytes(b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n1 0 0\n").unwrap_err().to_string();
+        assert_eq!(
+            e,
+            "p.ply:10: the file ends in element 'vertex' 2 of 3: the header promises 3"
+        );
+        let e = read_bytes(b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n").unwrap_err().to_string();
+        assert_eq!(
+            e,
+            "p.ply:13: vertex index 7 is out of range: the file has 3 vertices"
+        );
+    }
+}

@@ -1,0 +1,513 @@
+//! STL, ASCII and binary.
+//!
+//! Binary or ASCII is decided by size, not by the first word: a file whose length is exactly
+//! `84 + 50 * count` (the count read at byte 80) is binary, even when its 80-byte header starts
+//! with `solid` (SolidWorks and others write that). Otherwise a file starting with `solid` is
+//! ASCII; anything else of 84 bytes or more is a binary file whose size disagrees with its count,
+//! which is an error (truncated, or with extra bytes), never a silent partial read.
+//!
+//! ASCII: every `solid ... endsolid` block of the file is read (multi-solid files), keywords in
+//! any case, the name after `solid` may follow a tab; `facet normal` values are skipped unread
+//! (NaN normals are harmless: the winding defines the normal); a facet's loop may hold more than
+//! three vertices (a polygon, triangulated). Vertex coordinates must be finite.
+//!
+//! Both kinds index their vertices by exact equality (lossless). Written: binary (32-bit floats,
+//! an 80-byte header that does not start with `solid`, the normal from the winding) or ASCII
+//! (each number in its shortest exact `f64` form, so ASCII output round-trips bit for bit).
+
+use super::error::{malformed, IoError, Location, ProblemKind};
+use super::text::{self, show};
+use super::{ReadInfo, ReadOptions, ReadOutput};
+use crate::math::Point3;
+use crate::mesh::polygon::{triangulate, PolygonStats};
+use crate::mesh::weld::ExactIndexer;
+use crate::mesh::TriMesh;
+use std::io::Write;
+use std::path::Path;
+
+/// Whether `bytes` has the exact size of a binary STL with the count it declares.
+pub fn is_binary(bytes: &[u8]) -> bool {
+    bytes.len() >= 84
+        && 84
+            + 50 * u64::from(u32::from_le_bytes([
+                bytes[80], bytes[81], bytes[82], bytes[83],
+            ]))
+            == bytes.len() as u64
+}
+
+/// Whether `bytes` starts, after blanks, with the word `solid`.
+pub fn starts_with_solid(bytes: &[u8]) -> bool {
+    let t = bytes.trim_ascii_start();
+    t.len() >= 5
+        && t[..5].eq_ignore_ascii_case(b"solid")
+        && t.get(5).is_none_or(|c| c.is_ascii_whitespace())
+}
+
+/// Reads STL from `bytes` (`path` names the file in messages).
+pub fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<ReadOutput, IoError> {
+    if is_binary(bytes) {
+        read_binary(path, bytes)
+    } else if starts_with_solid(bytes) {
+        read_ascii(path, bytes, opts)
+    } else {
+        let size = bytes.len() as u64;
+        if size < 84 {
+            return Err(malformed(
+                path,
+                "binary STL",
+                Location::File,
+                ProblemKind::StlTooShort { size },
+            ));
+        }
+        let count = u64::from(u32::from_le_bytes([
+            bytes[80], bytes[81], bytes[82], bytes[83],
+        ]));
+        let needed = 84 + 50 * count;
+        let kind = if size < needed {
+            ProblemKind::StlTruncated {
+                count,
+                needed,
+                size,
+                first_missing: (size - 84) / 50,
+            }
+        } else {
+            ProblemKind::StlCountMismatch {
+                count,
+                needed,
+                size,
+            }
+        };
+        let offset = if size < needed {
+            84 + (size - 84) / 50 * 50
+        } else {
+            80
+        };
+        let record = if size < needed {
+            format!("triangle {}", (size - 84) / 50)
+        } else {
+            "triangle count".into()
+        };
+        Err(malformed(
+            path,
+            "binary STL",
+            Location::Byte { offset, record },
+            kind,
+        ))
+    }
+}
+
+fn read_binary(path: &Path, bytes: &[u8]) -> Result<ReadOutput, IoError> {
+    let count = (bytes.len() - 84) / 50;
+    let mut ix = ExactIndexer::with_capacity(count / 2 + 8);
+    let mut faces = Vec::with_capacity(count);
+    let mut nan_normals = 0usize;
+    for (t, rec) in bytes[84..].chunks_exact(50).enumerate() {
+        let f = |k: usize| {
+            f32::from_le_bytes([rec[4 * k], rec[4 * k + 1], rec[4 * k + 2], rec[4 * k + 3]])
+        };
+        if !(f(0).is_finite() && f(1).is_finite() && f(2).is_finite()) {
+            nan_normals += 1;
+        }
+        let mut face = [0u32; 3];
+        for (c, slot) in face.iter_mut().enumerate() {
+            let p = [f(3 + 3 * c), f(4 + 3 * c), f(5 + 3 * c)];
+            if let Some(k) = p.iter().position(|v| !v.is_finite()) {
+                let offset = (84 + 50 * t + 12 + 12 * c + 4 * k) as u64;
+                return Err(malformed(
+                    path,
+                    "binary STL",
+                    Location::Byte {
+                        offset,
+                        record: format!("triangle {t}, corner {c}"),
+                    },
+                    ProblemKind::BinaryNonFinite {
+                        value: f64::from(p[k]),
+                    },
+                ));
+            }
+            *slot = ix.index(Point3::new(
+                f64::from(p[0]),
+                f64::from(p[1]),
+                f64::from(p[2]),
+            ));
+        }
+        faces.push(face);
+    }
+    let positions = ix.into_positions();
+    let mut warnings = Vec::new();
+    if nan_normals > 0 {
+        warnings.push(format!("{nan_normals} facet normal(s) are not finite (ignored: the winding defines the normal)"));
+    }
+    let info = ReadInfo {
+        format: "stl-binary".into(),
+        vertices_in_file: positions.len(),
+        points: Some(count * 3),
+        polygons: PolygonStats {
+            polygons: count,
+            triangles: count,
+            ..Default::default()
+        },
+        warnings,
+        ..ReadInfo::default()
+    };
+    Ok(ReadOutput {
+        mesh: TriMesh::new(positions, faces),
+        info,
+    })
+}
+
+/// Whitespace-separated tokens with their line numbers.
+struct Tokens<'a> {
+    text: &'a [u8],
+    pos: usize,
+    line: u64,
+}
+
+impl<'a> Tokens<'a> {
+    fn next(&mut self) -> Option<(&'a [u8], u64)> {
+        let t = self.text;
+        while self.pos < t.len() && t[self.pos].is_ascii_whitespace() {
+            if t[self.pos] == b'\n' {
+                self.line += 1;
+            }
+            self.pos += 1;
+        }
+        if self.pos >= t.len() {
+            return None;
+        }
+        let start = self.pos;
+        while self.pos < t.len() && !t[self.pos].is_ascii_whitespace() {
+            self.pos += 1;
+        }
+        Some((&t[start..self.pos], self.line))
+    }
+
+    /// Skips the rest of the current line.
+    fn skip_line(&mut self) {
+        while self.pos < self.text.len() && self.text[self.pos] != b'\n' {
+            self.pos += 1;
+        }
+    }
+}
+
+fn read_ascii(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<ReadOutput, IoError> {
+    const FMT: &str = "ASCII STL";
+    let text = text::decode(bytes)
+        .map_err(|reason| malformed(path, FMT, Location::File, ProblemKind::Encoding { reason }))?;
+    let mut tk = Tokens {
+        text: &text,
+        pos: 0,
+        line: 1,
+    };
+    let err = |line: u64, kind: ProblemKind| malformed(path, FMT, Location::Line(line), kind);
+    let expect_word = |tk: &mut Tokens, word: &str| -> Result<u64, IoError> {
+        match tk.next() {
+            Some((t, l)) if t.eq_ignore_ascii_case(word.as_bytes()) => Ok(l),
+            Some((t, l)) => Err(err(
+                l,
+                ProblemKind::Expected {
+                    expected: format!("'{word}'"),
+                    found: show(t),
+                },
+            )),
+            None => Err(err(
+                tk.line,
+                ProblemKind::UnexpectedEof {
+                    expected: format!("'{word}'"),
+                },
+            )),
+        }
+    };
+    let mut ix = ExactIndexer::with_capacity(1024);
+    let mut polys: Vec<Vec<u32>> = Vec::new();
+    let mut solids = 0usize;
+    let mut warnings = Vec::new();
+    let mut nan_normals = 0usize;
+    'solids: loop {
+        match tk.next() {
+            None => break,
+            Some((t, _)) if t.eq_ignore_ascii_case(b"solid") => {
+                tk.skip_line();
+                solids += 1;
+            }
+            Some((t, l)) => {
+                return Err(err(
+                    l,
+                    ProblemKind::Expected {
+                        expected: "'solid'".into(),
+                        found: show(t),
+                    },
+                ))
+            }
+        }
+        loop {
+            let Some((t, l)) = tk.next() else {
+                warnings.push(format!(
+                    "solid {solids} has no 'endsolid' before the end of the file"
+                ));
+                break 'solids;
+            };
+            if t.eq_ignore_ascii_case(b"endsolid") {
+                tk.skip_line();
+                break;
+            }
+            if !t.eq_ignore_ascii_case(b"facet") {
+                return Err(err(
+                    l,
+                    ProblemKind::Expected {
+                        expected: "'facet' or 'endsolid'".into(),
+                        found: show(t),
+                    },
+                ));
+            }
+            // `normal nx ny nz` (optional), values not used.
+            let (mut t, mut l) = tk.next().ok_or_else(|| {
+                err(
+                    tk.line,
+                    ProblemKind::UnexpectedEof {
+                        expected: "'outer loop'".into(),
+                    },
+                )
+            })?;
+            if t.eq_ignore_ascii_case(b"normal") {
+                let mut finite = true;
+                for _ in 0..3 {
+                    let (v, vl) = tk.next().ok_or_else(|| {
+                        err(
+                            tk.line,
+                            ProblemKind::UnexpectedEof {
+                                expected: "a normal component".into(),
+                            },
+                        )
+                    })?;
+                    match text::number(v) {
+                        Ok(_) => {}
+                        Err(ProblemKind::NonFinite { .. }) => finite = false,
+                        Err(k) => return Err(err(vl, k)),
+                    }
+                }
+                nan_normals += usize::from(!finite);
+                (t, l) = tk.next().ok_or_else(|| {
+                    err(
+                        tk.line,
+                        ProblemKind::UnexpectedEof {
+                            expected: "'outer loop'".into(),
+                        },
+                    )
+                })?;
+            }
+            if !t.eq_ignore_ascii_case(b"outer") {
+                return Err(err(
+                    l,
+                    ProblemKind::Expected {
+                        expected: "'outer loop'".into(),
+                        found: show(t),
+                    },
+                ));
+            }
+            expect_word(&mut tk, "loop")?;
+            let mut ring = Vec::with_capacity(3);
+            loop {
+                let (t, l) = tk.next().ok_or_else(|| {
+                    err(
+                        tk.line,
+                        ProblemKind::UnexpectedEof {
+                            expected: "'vertex' or 'endloop'".into(),
+                        },
+                    )
+                })?;
+                if t.eq_ignore_ascii_case(b"endloop") {
+                    if ring.len() < 3 {
+                        return Err(err(l, ProblemKind::TooFewCorners { found: ring.len() }));
+                    }
+                    break;
+                }
+                if !t.eq_ignore_ascii_case(b"vertex") {
+                    return Err(err(
+                        l,
+                        ProblemKind::Expected {
+                            expected: "'vertex' or 'endloop'".into(),
+                            found: show(t),
+                        },
+                    ));
+                }
+                let mut p = [0.0; 3];
+                for c in &mut p {
+                    let (v, vl) = tk.next().ok_or_else(|| {
+                        err(
+                            tk.line,
+                            ProblemKind::UnexpectedEof {
+                                expected: "a vertex coordinate".into(),
+                            },
+                        )
+                    })?;
+                    *c = text::number(v).map_err(|k| err(vl, k))?;
+                }
+                ring.push(ix.index(Point3::new(p[0], p[1], p[2])));
+            }
+            expect_word(&mut tk, "endfacet")?;
+            polys.push(ring);
+        }
+    }
+    if nan_normals > 0 {
+        warnings.push(format!("{nan_normals} facet normal(s) are not finite (ignored: the winding defines the normal)"));
+    }
+    let positions = ix.into_positions();
+    let mut faces = Vec::with_capacity(polys.len());
+    let mut stats = PolygonStats::default();
+    for ring in &polys {
+        triangulate(&positions, ring, opts.quad_split, &mut faces, &mut stats);
+    }
+    let info = ReadInfo {
+        format: "stl-ascii".into(),
+        vertices_in_file: positions.len(),
+        points: Some(polys.iter().map(Vec::len).sum()),
+        solids: Some(solids),
+        polygons: stats,
+        warnings,
+        ..ReadInfo::default()
+    };
+    Ok(ReadOutput {
+        mesh: TriMesh::new(positions, faces),
+        info,
+    })
+}
+
+/// Unit normal of a face from its winding (zero when degenerate).
+fn unit_normal(mesh: &TriMesh, f: usize) -> [f64; 3] {
+    let n = mesh.face_cross(f);
+    let l = n.norm();
+    if l > 0.0 {
+        (n / l).into()
+    } else {
+        [0.0; 3]
+    }
+}
+
+/// Writes binary STL. Fails with `InvalidInput` naming the vertex when a coordinate is beyond
+/// 32-bit float range.
+pub fn write_binary(w: &mut impl Write, mesh: &TriMesh) -> std::io::Result<()> {
+    if let Some((v, c)) = mesh.positions.iter().enumerate().find_map(|(i, p)| {
+        p.iter()
+            .find(|c| (**c as f32).is_infinite())
+            .map(|c| (i, *c))
+    }) {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            OutOfRange {
+                vertex: v,
+                value: c,
+            },
+        ));
+    }
+    let mut header = [b' '; 80];
+    let tag = b"drapekit binary STL";
+    header[..tag.len()].copy_from_slice(tag);
+    w.write_all(&header)?;
+    w.write_all(&(mesh.faces.len() as u32).to_le_bytes())?;
+    let mut rec = [0u8; 50];
+    for (f, face) in mesh.faces.iter().enumerate() {
+        let n = unit_normal(mesh, f);
+        for (k, v) in n.iter().enumerate() {
+            rec[4 * k..4 * k + 4].copy_from_slice(&(*v as f32).to_le_bytes());
+        }
+        for (c, &vi) in face.iter().enumerate() {
+            let p = mesh.positions[vi as usize];
+            for k in 0..3 {
+                let o = 12 + 12 * c + 4 * k;
+                rec[o..o + 4].copy_from_slice(&(p[k] as f32).to_le_bytes());
+            }
+        }
+        w.write_all(&rec)?;
+    }
+    Ok(())
+}
+
+/// A coordinate beyond 32-bit float range, for binary STL.
+#[derive(Debug)]
+pub struct OutOfRange {
+    /// Vertex index.
+    pub vertex: usize,
+    /// The coordinate.
+    pub value: f64,
+}
+
+impl std::fmt::Display for OutOfRange {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "vertex {} coordinate {} is beyond 32-bit float range",
+            self.vertex, self.value
+        )
+    }
+}
+
+impl std::error::Error for OutOfRange {}
+
+/// Writes ASCII STL, one solid named `drapekit`.
+pub fn write_ascii(w: &mut impl Write, mesh: &TriMesh) -> std::io::Result<()> {
+    writeln!(w, "solid drapekit")?;
+    for (f, face) in mesh.faces.iter().enumerate() {
+        let n = unit_normal(mesh, f);
+        writeln!(w, "  facet normal {:?} {:?} {:?}", n[0], n[1], n[2])?;
+        writeln!(w, "    outer loop")?;
+        for &v in face {
+            let p = mesh.positions[v as usize];
+            writeln!(w, "      vertex {:?} {:?} {:?}", p.x, p.y, p.z)?;
+        }
+        writeln!(w, "    endloop")?;
+        writeln!(w, "  endfacet")?;
+    }
+    writeln!(w, "endsolid drapekit")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn multi_solid_tab_name_and_nan_normal() {
+        let s = "solid\tfirst\n facet normal nan nan nan\n  outer loop\n   vertex 0 0 0\n   vertex 1 0 0\n   vertex 0 1 0\n  endloop\n endfacet\nendsolid first\n\
+                 SOLID second\n FACET NORMAL 0 0 1\n  OUTER LOOP\n   VERTEX 0 0 1\n   VERTEX 1 0 1\n   VERTEX 0 1 1\n  ENDLOOP\n ENDFACET\nENDSOLID\n";
+        let r = read(Path::new("a.stl"), s.as_bytes(), &ReadOptions::default()).unwrap();
+        assert_eq!(r.mesh.faces.len(), 2);
+        assert_eq!(r.info.solids, Some(2));
+        assert_eq!(r.info.warnings.len(), 1);
+    }
+
+    #[test]
+    fn binary_with_solid_header_round_trips() {
+        let m = crate::mesh::generate::cube(2.0);
+        let mut buf = Vec::new();
+        write_binary(&mut buf, &m).unwrap();
+        buf[..5].copy_from_slice(b"solid");
+        let r = read(Path::new("b.stl"), &buf, &ReadOptions::default()).unwrap();
+        assert_eq!(r.info.format, "stl-binary");
+        // Same triangles, corner for corner (vertices are numbered in order of appearance).
+        assert_eq!(r.mesh.faces.len(), m.faces.len());
+        for f in 0..m.faces.len() {
+            assert_eq!(r.mesh.corners(f), m.corners(f));
+        }
+    }
+
+    #[test]
+    fn truncated_and_oversized_binary() {
+        let m = crate::mesh::generate::cube(2.0);
+        let mut buf = Vec::new();
+        write_binary(&mut buf, &m).unwrap();
+        let e = read(
+            Path::new("b.stl"),
+            &buf[..84 + 50 * 5 + 20],
+            &ReadOptions::default(),
+        )
+        .unwrap_err()
+        .to_string();
+        assert_eq!(e, "b.stl: byte 334 (triangle 5): truncated binary STL: the header promises 12 triangles (684 bytes) but the file has 354 bytes; triangle 5 is incomplete");
+        let mut long = buf.clone();
+        long.extend_from_slice(&[0; 50]);
+        let e = read(Path::new("b.stl"), &long, &ReadOptions::default())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("triangle count 12 disagrees with the file size: 12 triangles take 684 bytes, the file has 734"), "{e}");
+    }
+}

@@ -1,0 +1,325 @@
+//! Vertex triples: the AutoCAD-LISP export of the paper. A face is its corner points in order.
+//!
+//! Layouts read (and mixed within a file):
+//! * one point per line, three lines a triangle (the paper's own export);
+//! * faces between blank lines: a block of 3 points is a triangle, of 4 a quad;
+//! * a whole face per line: 9 numbers a triangle, 12 a quad.
+//!
+//! Points may be written as LISP lists `(1.0 2.0 3.0)`; numbers are separated by spaces, tabs,
+//! commas or semicolons. A line starting with `;` or `#` is a comment, `#` ends a line, and so
+//! does a `;` followed by text that is not a number. Line ends may be LF, CRLF or CR.
+//!
+//! Which layout: when the file has several blank-line-separated blocks of points and most have
+//! 3 or 4 points, every block is a face; otherwise each run of points is read three lines a
+//! triangle (so a file of one run of 4 points is a triangle and a leftover point, an error: a
+//! lone quad is written as 12 numbers on a line). A 4-point face with a repeated corner (an AutoCAD 3DFACE triangle) is one
+//! triangle; other quads are split as `--quad-split` says (see `mesh::polygon`).
+//!
+//! Written: one point per line, three lines a triangle, each number in the shortest form that
+//! reads back to the same `f64` bit for bit.
+
+use super::error::{IoError, Location, ProblemKind, Problems};
+use super::text::{self, show};
+use super::{ReadInfo, ReadOptions, ReadOutput};
+use crate::math::Point3;
+use crate::mesh::polygon::{triangulate, PolygonStats};
+use crate::mesh::weld::ExactIndexer;
+use crate::mesh::TriMesh;
+use std::io::Write;
+use std::path::Path;
+
+const FORMAT: &str = "vertex-triples";
+
+struct Block {
+    points: Vec<(u64, Point3)>,
+}
+
+enum Item {
+    Block(Block),
+    Face(Vec<Point3>),
+}
+
+/// Reads vertex triples from `bytes` (`path` names the file in messages).
+pub fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<ReadOutput, IoError> {
+    let text = text::decode(bytes).map_err(|reason| {
+        super::error::malformed(
+            path,
+            FORMAT,
+            Location::File,
+            ProblemKind::Encoding { reason },
+        )
+    })?;
+    let mut problems = Problems::default();
+    let mut items: Vec<Item> = Vec::new();
+    let mut current: Option<Block> = None;
+    let mut nums: Vec<f64> = Vec::with_capacity(12);
+    let mut face_lines = 0usize;
+    let mut point_lines = 0usize;
+    for (ln, line) in text::lines(&text) {
+        let trimmed = line.trim_ascii();
+        if trimmed.is_empty() {
+            if let Some(b) = current.take() {
+                items.push(Item::Block(b));
+            }
+            continue;
+        }
+        if trimmed[0] == b';' || trimmed[0] == b'#' {
+            continue;
+        }
+        nums.clear();
+        if let Err(kind) = numbers_of(trimmed, &mut nums) {
+            problems.line(ln, kind);
+            continue;
+        }
+        match nums.len() {
+            0 => {}
+            3 => {
+                point_lines += 1;
+                current
+                    .get_or_insert_with(|| Block { points: Vec::new() })
+                    .points
+                    .push((ln, Point3::new(nums[0], nums[1], nums[2])));
+            }
+            9 | 12 => {
+                face_lines += 1;
+                if let Some(b) = current.take() {
+                    items.push(Item::Block(b));
+                }
+                items.push(Item::Face(
+                    nums.chunks_exact(3)
+                        .map(|c| Point3::new(c[0], c[1], c[2]))
+                        .collect(),
+                ));
+            }
+            n => problems.line(ln, ProblemKind::TriplesNumberCount { found: n }),
+        }
+    }
+    if let Some(b) = current.take() {
+        items.push(Item::Block(b));
+    }
+
+    let sizes: Vec<usize> = items
+        .iter()
+        .filter_map(|i| match i {
+            Item::Block(b) => Some(b.points.len()),
+            Item::Face(_) => None,
+        })
+        .collect();
+    let face_like = sizes.iter().filter(|&&s| s == 3 || s == 4).count();
+    let block_mode = sizes.len() > 1 && 2 * face_like > sizes.len();
+    for item in &items {
+        if let Item::Block(b) = item {
+            let n = b.points.len();
+            let first = b.points[0].0;
+            let last = b.points[n - 1].0;
+            if block_mode && n != 3 && n != 4 {
+                problems.line(
+                    first,
+                    ProblemKind::TriplesBlock {
+                        found: n,
+                        first,
+                        last,
+                    },
+                );
+            } else if !block_mode && n % 3 != 0 {
+                problems.line(
+                    b.points[n - n % 3].0,
+                    ProblemKind::TriplesLeftover { count: n % 3 },
+                );
+            }
+        }
+    }
+    problems.check(path, FORMAT)?;
+
+    let total_points: usize = point_lines
+        + items
+            .iter()
+            .map(|i| if let Item::Face(p) = i { p.len() } else { 0 })
+            .sum::<usize>();
+    let mut ix = ExactIndexer::with_capacity(total_points / 2 + 8);
+    let mut polys: Vec<Vec<u32>> = Vec::new();
+    for item in &items {
+        match item {
+            Item::Face(pts) => polys.push(pts.iter().map(|p| ix.index(*p)).collect()),
+            Item::Block(b) if block_mode => {
+                polys.push(b.points.iter().map(|(_, p)| ix.index(*p)).collect())
+            }
+            Item::Block(b) => {
+                for tri in b.points.chunks_exact(3) {
+                    polys.push(tri.iter().map(|(_, p)| ix.index(*p)).collect());
+                }
+            }
+        }
+    }
+    let positions = ix.into_positions();
+    let mut faces = Vec::with_capacity(polys.len() * 2);
+    let mut stats = PolygonStats::default();
+    for poly in &polys {
+        triangulate(&positions, poly, opts.quad_split, &mut faces, &mut stats);
+    }
+    let layout = match (point_lines > 0, face_lines > 0, block_mode) {
+        (true, true, _) => "mixed",
+        (false, true, _) => "face per line",
+        (true, false, true) => "faces between blank lines",
+        (true, false, false) => "one point per line",
+        (false, false, _) => "empty",
+    };
+    let info = ReadInfo {
+        format: FORMAT.into(),
+        layout: Some(layout.into()),
+        points: Some(total_points),
+        vertices_in_file: positions.len(),
+        polygons: stats,
+        ..ReadInfo::default()
+    };
+    Ok(ReadOutput {
+        mesh: TriMesh::new(positions, faces),
+        info,
+    })
+}
+
+/// The numbers on one line of vertex triples.
+fn numbers_of(line: &[u8], out: &mut Vec<f64>) -> Result<(), ProblemKind> {
+    let mut depth: i64 = 0;
+    let mut i = 0;
+    let n = line.len();
+    while i < n {
+        let c = line[i];
+        match c {
+            b'#' => break,
+            b';' => {
+                let rest = line[i + 1..].trim_ascii_start();
+                let numeric = rest
+                    .first()
+                    .is_none_or(|&r| r.is_ascii_digit() || matches!(r, b'+' | b'-' | b'.' | b'('));
+                if !numeric {
+                    break;
+                }
+                i += 1;
+            }
+            b'(' => {
+                depth += 1;
+                i += 1;
+            }
+            b')' => {
+                depth -= 1;
+                if depth < 0 {
+                    return Err(ProblemKind::UnbalancedParens);
+                }
+                i += 1;
+            }
+            b',' | b'\'' => i += 1,
+            c if c.is_ascii_whitespace() => i += 1,
+            _ => {
+                let start = i;
+                while i < n
+                    && !matches!(line[i], b'(' | b')' | b',' | b';' | b'#' | b'\'')
+                    && !line[i].is_ascii_whitespace()
+                {
+                    i += 1;
+                }
+                let tok = &line[start..i];
+                out.push(text::number(tok).map_err(|k| match k {
+                    ProblemKind::NotANumber { .. } => ProblemKind::NotANumber { token: show(tok) },
+                    k => k,
+                })?);
+            }
+        }
+    }
+    if depth != 0 {
+        return Err(ProblemKind::UnbalancedParens);
+    }
+    Ok(())
+}
+
+/// Writes `mesh` as vertex triples: one point per line, three lines a triangle.
+pub fn write(w: &mut impl Write, mesh: &TriMesh) -> std::io::Result<()> {
+    for f in &mesh.faces {
+        for &v in f {
+            let p = mesh.positions[v as usize];
+            writeln!(w, "{:?} {:?} {:?}", p.x, p.y, p.z)?;
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::polygon::QuadSplit;
+
+    fn read_str(s: &str) -> Result<ReadOutput, IoError> {
+        read(Path::new("t.txt"), s.as_bytes(), &ReadOptions::default())
+    }
+
+    #[test]
+    fn layouts_agree() {
+        let per_point = "0 0 0\n1 0 0\n0 1 0\n";
+        let per_line = "0,0,0, 1,0,0, 0,1,0\n";
+        let lisp = "; exported\r\n(0.0 0.0 0.0)\r\n(1.0 0.0 0.0)\r\n(0.0 1.0 0.0)\r\n";
+        let semis = "0;0;0\n+1;-0.;.0e0\n0;1;0 ; corner three\n";
+        let a = read_str(per_point).unwrap().mesh;
+        for s in [per_line, lisp, semis] {
+            assert_eq!(read_str(s).unwrap().mesh, a, "{s}");
+        }
+    }
+
+    #[test]
+    fn blocks_of_three_and_four() {
+        let s = "0 0 0\n1 0 0\n1 1 0\n0 1 0\n\n0 0 1\n1 0 1\n1 1 1\n\n";
+        let r = read_str(s).unwrap();
+        assert_eq!(r.mesh.faces.len(), 3);
+        assert_eq!(r.info.polygons.quads, 1);
+        let r = read(
+            Path::new("t"),
+            s.as_bytes(),
+            &ReadOptions {
+                quad_split: QuadSplit::Shortest,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        assert_eq!(r.mesh.faces.len(), 3);
+    }
+
+    #[test]
+    fn autocad_3dface_triangle() {
+        let r = read_str("0 0 0 1 0 0 0 1 0 0 1 0\n").unwrap();
+        assert_eq!(r.mesh.faces.len(), 1);
+        assert_eq!(r.info.polygons.collapsed_quads, 1);
+    }
+
+    #[test]
+    fn errors_name_lines() {
+        let e = read_str("0 0 0\n1 0 0\n0 1 0\n5 5 5\n")
+            .unwrap_err()
+            .to_string();
+        assert_eq!(e, "t.txt:4: 1 point(s) left over at the end of a run of points (three lines a triangle): the last triangle is incomplete");
+        let e = read_str("0 0 0\n1 0\n").unwrap_err().to_string();
+        assert!(e.contains("t.txt:2: expected 3 numbers"), "{e}");
+        let e = read_str("0 0 0\n1 0 x\n0 1 nan\n").unwrap_err().to_string();
+        assert!(
+            e.contains("t.txt:2: 'x' is not a number")
+                && e.contains("t.txt:3: 'nan' is not a finite number"),
+            "{e}"
+        );
+        let e = read_str("(0 0 0\n").unwrap_err().to_string();
+        assert!(e.contains("t.txt:1: unbalanced parentheses"), "{e}");
+    }
+
+    #[test]
+    fn write_round_trips_bit_exactly() {
+        let mut m = crate::mesh::generate::icosphere(1);
+        m.positions[0].x = 0.1 + 0.2;
+        m.positions[1].y = -1e-300;
+        let mut buf = Vec::new();
+        write(&mut buf, &m).unwrap();
+        let back = read_str(std::str::from_utf8(&buf).unwrap()).unwrap().mesh;
+        assert_eq!(back.faces.len(), m.faces.len());
+        for (f, g) in m.faces.iter().zip(&back.faces) {
+            for k in 0..3 {
+                assert_eq!(m.positions[f[k] as usize], back.positions[g[k] as usize]);
+            }
+        }
+    }
+}

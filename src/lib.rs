@@ -1,0 +1,9 @@
+//! drapekit: a garment-CAD toolchain.
+//!
+//! One pipeline, three jobs: convert CAD exports into clean, consistently oriented triangle
+//! meshes ([`io`], [`mesh`]); fit mannequins; drape cloth. `src/main.rs` only calls [`cli::main`].
+
+pub mod cli;
+pub mod io;
+pub mod math;
+pub mod mesh;

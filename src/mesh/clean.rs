@@ -1,0 +1,86 @@
+//! Dropping faces that carry no surface: degenerate ones (a repeated corner, or an area at most
+//! [`tol::DEGENERATE_AREA_REL`] times the squared bounding-box diagonal) and duplicates (the same
+//! three vertices as an earlier face, in either winding: the first one stays).
+
+use super::topology::is_index_degenerate;
+use super::TriMesh;
+use crate::math::tol;
+use rustc_hash::FxHashSet;
+
+/// Which faces are degenerate, and how many.
+pub fn find_degenerate(mesh: &TriMesh) -> (Vec<bool>, usize) {
+    let d = mesh.diagonal();
+    // Compare twice the area squared against the threshold, avoiding a square root per face.
+    let limit = 2.0 * tol::DEGENERATE_AREA_REL * d * d;
+    let limit2 = limit * limit;
+    let mut n = 0;
+    let flags = (0..mesh.faces.len())
+        .map(|f| {
+            let bad =
+                is_index_degenerate(&mesh.faces[f]) || mesh.face_cross(f).norm_squared() <= limit2;
+            n += usize::from(bad);
+            bad
+        })
+        .collect();
+    (flags, n)
+}
+
+/// Which faces repeat the vertex set of an earlier face, and how many.
+pub fn find_duplicates(mesh: &TriMesh) -> (Vec<bool>, usize) {
+    let mut seen: FxHashSet<[u32; 3]> = FxHashSet::default();
+    seen.reserve(mesh.faces.len());
+    let mut n = 0;
+    let flags = mesh
+        .faces
+        .iter()
+        .map(|f| {
+            let mut k = *f;
+            k.sort_unstable();
+            let dup = !seen.insert(k);
+            n += usize::from(dup);
+            dup
+        })
+        .collect();
+    (flags, n)
+}
+
+/// Drops degenerate faces; returns how many went.
+pub fn drop_degenerate(mesh: &mut TriMesh) -> usize {
+    let (bad, n) = find_degenerate(mesh);
+    if n > 0 {
+        let keep: Vec<bool> = bad.iter().map(|b| !b).collect();
+        mesh.retain_faces(&keep);
+    }
+    n
+}
+
+/// Drops duplicate faces; returns how many went.
+pub fn drop_duplicates(mesh: &mut TriMesh) -> usize {
+    let (dup, n) = find_duplicates(mesh);
+    if n > 0 {
+        let keep: Vec<bool> = dup.iter().map(|b| !b).collect();
+        mesh.retain_faces(&keep);
+    }
+    n
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::Point3;
+
+    #[test]
+    fn drops_repeated_index_sliver_and_duplicates() {
+        let p = vec![
+            Point3::new(0.0, 0.0, 0.0),
+            Point3::new(1.0, 0.0, 0.0),
+            Point3::new(0.0, 1.0, 0.0),
+            Point3::new(2.0, 1e-15, 0.0),
+        ];
+        // A good face, its reverse (duplicate), a repeated corner, a collinear sliver.
+        let mut m = TriMesh::new(p, vec![[0, 1, 2], [0, 2, 1], [0, 0, 1], [0, 1, 3]]);
+        assert_eq!(drop_duplicates(&mut m), 1);
+        assert_eq!(drop_degenerate(&mut m), 2);
+        assert_eq!(m.faces, vec![[0, 1, 2]]);
+    }
+}

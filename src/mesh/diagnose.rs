@@ -1,0 +1,386 @@
+//! The inspect report: everything worth knowing about a mesh's shell, and its *shell state*.
+//!
+//! Shell states, from worst to best:
+//! * `irregular`: no faces, or degenerate or duplicate faces, or an edge shared by three or more
+//!   faces, or a vertex whose faces form more than one fan (non-manifold vertex);
+//! * `regular`: a 2-manifold (with or without boundary) whose winding is inconsistent somewhere,
+//!   or cannot be made consistent (non-orientable);
+//! * `oriented`: a 2-manifold with one consistent winding per component, but open (boundary
+//!   edges) or with a closed component facing inward;
+//! * `closed`: oriented, watertight (every edge shared by exactly two faces) and every component
+//!   facing outward (positive volume).
+//!
+//! Counting rules: an edge is an unordered vertex pair used by at least one non-degenerate face;
+//! a boundary edge is used by exactly one face; boundary loops are the connected pieces of the
+//! boundary-edge graph; the Euler characteristic is `V - E + F` over non-degenerate faces and the
+//! vertices they use; components are connected through manifold edges (see `orient`).
+
+use super::clean::{find_degenerate, find_duplicates};
+use super::orient::{self, Plan};
+use super::topology::{is_index_degenerate, Topology, BOUNDARY, NON_MANIFOLD};
+use super::weld::{weld_map, WeldTolerance};
+use super::TriMesh;
+use serde::Serialize;
+use std::fmt;
+
+/// Shell state, from worst to best (see the module docs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ShellState {
+    /// Degenerate, duplicate or non-manifold pieces, or no faces.
+    Irregular,
+    /// Manifold, winding inconsistent.
+    Regular,
+    /// Manifold, consistently wound; open or partly inward.
+    Oriented,
+    /// Watertight, consistently wound, outward.
+    Closed,
+}
+
+impl fmt::Display for ShellState {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            ShellState::Irregular => "irregular",
+            ShellState::Regular => "regular",
+            ShellState::Oriented => "oriented",
+            ShellState::Closed => "closed",
+        })
+    }
+}
+
+/// Axis-aligned box, for the report.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct BoxReport {
+    /// Smallest corner.
+    pub min: [f64; 3],
+    /// Largest corner.
+    pub max: [f64; 3],
+    /// Edge lengths.
+    pub size: [f64; 3],
+    /// Diagonal length.
+    pub diagonal: f64,
+}
+
+/// One closed component's volume.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ClosedVolume {
+    /// Component number.
+    pub component: usize,
+    /// Its faces.
+    pub faces: usize,
+    /// Signed volume with the winding most of the component's faces have.
+    pub volume: f64,
+    /// Positive volume and consistent winding.
+    pub outward: bool,
+}
+
+/// The inspect report. Every key is documented in the README.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Diagnosis {
+    /// Vertices in the mesh.
+    pub vertices: usize,
+    /// Vertices no face uses.
+    pub unreferenced_vertices: usize,
+    /// Faces (triangles).
+    pub faces: usize,
+    /// Bounding box (`null` when empty).
+    pub bbox: Option<BoxReport>,
+    /// Distinct edges.
+    pub edges: usize,
+    /// Components (faces connected through manifold edges).
+    pub components: usize,
+    /// Components that are closed.
+    pub closed_components: usize,
+    /// Components that are open.
+    pub open_components: usize,
+    /// Edges used by one face.
+    pub boundary_edges: usize,
+    /// Connected pieces of the boundary.
+    pub boundary_loops: usize,
+    /// Edges used by three or more faces.
+    pub non_manifold_edges: usize,
+    /// Vertices whose faces form more than one fan.
+    pub non_manifold_vertices: usize,
+    /// Faces with a repeated corner or (near) zero area.
+    pub degenerate_faces: usize,
+    /// Faces repeating an earlier face's vertices.
+    pub duplicate_faces: usize,
+    /// Vertices within the default weld tolerance of an earlier one (`null` when not computed).
+    pub near_duplicate_vertices: Option<usize>,
+    /// One winding across every manifold edge.
+    pub winding_consistent: bool,
+    /// Components that cannot be wound consistently.
+    pub non_orientable_components: usize,
+    /// Consistent, and every component faces outward by the orient rules.
+    pub outward: bool,
+    /// Every edge used by exactly two faces.
+    pub watertight: bool,
+    /// Per closed component.
+    pub volumes: Vec<ClosedVolume>,
+    /// Sum of the closed components' volumes.
+    pub total_volume: f64,
+    /// V - E + F.
+    pub euler_characteristic: i64,
+    /// Overall state.
+    pub shell_state: ShellState,
+}
+
+/// Inspects `mesh` as it is.
+pub fn diagnose(mesh: &TriMesh) -> Diagnosis {
+    let topo = Topology::build(mesh);
+    let plan = orient::plan(mesh, &topo, true);
+    let mut d = diagnose_with(mesh, &topo, &plan, false);
+    let dist = WeldTolerance::default().distance(mesh.diagonal());
+    d.near_duplicate_vertices = Some(mesh.positions.len() - weld_map(&mesh.positions, dist).1);
+    d
+}
+
+/// Inspects `mesh` with a topology and orientation plan already computed. With `applied`, the
+/// winding facts are those after `orient::apply(mesh, plan)` (flips change no other fact).
+pub fn diagnose_with(mesh: &TriMesh, topo: &Topology, plan: &Plan, applied: bool) -> Diagnosis {
+    let nv = mesh.positions.len();
+    let mut used = vec![false; nv];
+    let mut faces_ok = 0usize;
+    for f in &mesh.faces {
+        if !is_index_degenerate(f) {
+            faces_ok += 1;
+            for &v in f {
+                used[v as usize] = true;
+            }
+        }
+    }
+    let unreferenced = {
+        let mut any = vec![false; nv];
+        for f in &mesh.faces {
+            for &v in f {
+                any[v as usize] = true;
+            }
+        }
+        any.iter().filter(|&&u| !u).count()
+    };
+    let v_used = used.iter().filter(|&&u| u).count();
+
+    let mut manifold_half = 0usize;
+    let mut boundary = 0usize;
+    let mut boundary_uf = UnionFind::new(nv);
+    for (h, &o) in topo.opp.iter().enumerate() {
+        if is_index_degenerate(&mesh.faces[h / 3]) {
+            continue;
+        }
+        match o {
+            BOUNDARY => {
+                boundary += 1;
+                let f = &mesh.faces[h / 3];
+                boundary_uf.union(f[h % 3], f[(h + 1) % 3]);
+            }
+            NON_MANIFOLD => {}
+            _ => manifold_half += 1,
+        }
+    }
+    let boundary_loops = {
+        let mut roots: Vec<u32> = Vec::new();
+        for (h, &o) in topo.opp.iter().enumerate() {
+            if o == BOUNDARY && !is_index_degenerate(&mesh.faces[h / 3]) {
+                roots.push(boundary_uf.find(mesh.faces[h / 3][h % 3]));
+            }
+        }
+        roots.sort_unstable();
+        roots.dedup();
+        roots.len()
+    };
+    let edges = manifold_half / 2 + boundary + plan.non_manifold_edges;
+    let non_manifold_vertices = count_non_manifold_vertices(mesh, topo);
+    let (_, degenerate) = find_degenerate(mesh);
+    let (_, duplicates) = find_duplicates(mesh);
+
+    let non_orientable = plan.components.iter().filter(|c| !c.orientable).count();
+    let (winding_consistent, outward) = if applied {
+        (non_orientable == 0, non_orientable == 0)
+    } else {
+        let consistent =
+            non_orientable == 0 && plan.components.iter().all(|c| c.inconsistent_faces == 0);
+        (consistent, consistent && plan.is_noop())
+    };
+    let volumes: Vec<ClosedVolume> = plan
+        .components
+        .iter()
+        .enumerate()
+        .filter(|(_, c)| c.closed)
+        .map(|(i, c)| {
+            let v = c.volume.unwrap_or(0.0);
+            let v = if applied && c.inverted { -v } else { v };
+            let outward = c.orientable && (applied || c.inconsistent_faces == 0) && v > 0.0;
+            ClosedVolume {
+                component: i,
+                faces: c.faces,
+                volume: v,
+                outward,
+            }
+        })
+        .collect();
+    let total_volume = volumes.iter().map(|v| v.volume).sum();
+    let non_manifold_edges = plan.non_manifold_edges;
+    let watertight = faces_ok > 0 && boundary == 0 && non_manifold_edges == 0;
+    let shell_state = if mesh.faces.is_empty()
+        || degenerate > 0
+        || duplicates > 0
+        || non_manifold_edges > 0
+        || non_manifold_vertices > 0
+    {
+        ShellState::Irregular
+    } else if !winding_consistent {
+        ShellState::Regular
+    } else if watertight && outward && volumes.iter().all(|v| v.outward) {
+        ShellState::Closed
+    } else {
+        ShellState::Oriented
+    };
+    let closed_components = plan.components.iter().filter(|c| c.closed).count();
+    Diagnosis {
+        vertices: nv,
+        unreferenced_vertices: unreferenced,
+        faces: mesh.faces.len(),
+        bbox: mesh.bbox().map(|b| BoxReport {
+            min: b.min.coords.into(),
+            max: b.max.coords.into(),
+            size: b.size().into(),
+            diagonal: b.diagonal(),
+        }),
+        edges,
+        components: plan.components.len(),
+        closed_components,
+        open_components: plan.components.len() - closed_components,
+        boundary_edges: boundary,
+        boundary_loops,
+        non_manifold_edges,
+        non_manifold_vertices,
+        degenerate_faces: degenerate,
+        duplicate_faces: duplicates,
+        near_duplicate_vertices: None,
+        winding_consistent,
+        non_orientable_components: non_orientable,
+        outward,
+        watertight,
+        volumes,
+        total_volume,
+        euler_characteristic: v_used as i64 - edges as i64 + faces_ok as i64,
+        shell_state,
+    }
+}
+
+/// Vertices whose incident faces, joined through manifold edges at the vertex, form more than
+/// one fan.
+fn count_non_manifold_vertices(mesh: &TriMesh, topo: &Topology) -> usize {
+    let mut count = 0;
+    let mut parent: Vec<usize> = Vec::new();
+    for v in 0..mesh.positions.len() as u32 {
+        let star = topo.vertex_faces(v);
+        if star.len() < 2 {
+            continue;
+        }
+        parent.clear();
+        parent.extend(0..star.len());
+        fn find(p: &mut [usize], mut x: usize) -> usize {
+            while p[x] != x {
+                p[x] = p[p[x]];
+                x = p[x];
+            }
+            x
+        }
+        for (k, &f) in star.iter().enumerate() {
+            let face = &mesh.faces[f as usize];
+            for i in 0..3 {
+                // The two edges of f touching v.
+                if face[i] != v && face[(i + 1) % 3] != v {
+                    continue;
+                }
+                let o = topo.opp[f as usize * 3 + i];
+                if o >= NON_MANIFOLD {
+                    continue;
+                }
+                let g = o / 3;
+                if let Ok(j) = star.binary_search(&g) {
+                    let (a, b) = (find(&mut parent, k), find(&mut parent, j));
+                    parent[a] = b;
+                }
+            }
+        }
+        let fans = (0..star.len())
+            .filter(|&k| find(&mut parent, k) == k)
+            .count();
+        if fans > 1 {
+            count += 1;
+        }
+    }
+    count
+}
+
+struct UnionFind {
+    parent: Vec<u32>,
+}
+
+impl UnionFind {
+    fn new(n: usize) -> UnionFind {
+        UnionFind {
+            parent: (0..n as u32).collect(),
+        }
+    }
+    fn find(&mut self, mut x: u32) -> u32 {
+        while self.parent[x as usize] != x {
+            let p = self.parent[self.parent[x as usize] as usize];
+            self.parent[x as usize] = p;
+            x = p;
+        }
+        x
+    }
+    fn union(&mut self, a: u32, b: u32) {
+        let (ra, rb) = (self.find(a), self.find(b));
+        if ra != rb {
+            self.parent[ra as usize] = rb;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::generate;
+
+    #[test]
+    fn cube_is_closed_sphere_of_euler_two() {
+        let d = diagnose(&generate::cube(2.0));
+        assert_eq!(d.shell_state, ShellState::Closed);
+        assert_eq!((d.vertices, d.edges, d.faces), (8, 18, 12));
+        assert_eq!(d.euler_characteristic, 2);
+        assert!((d.total_volume - 8.0).abs() < 1e-12);
+        assert!(d.watertight && d.outward && d.winding_consistent);
+    }
+
+    #[test]
+    fn open_box_has_one_boundary_loop() {
+        let mut m = generate::cube(1.0);
+        m.faces.truncate(10);
+        let d = diagnose(&m);
+        assert_eq!((d.boundary_edges, d.boundary_loops), (4, 1));
+        assert_eq!(d.euler_characteristic, 1);
+        assert_eq!(d.shell_state, ShellState::Oriented);
+    }
+
+    #[test]
+    fn two_cubes_touching_at_a_vertex() {
+        let mut m = generate::cube(1.0);
+        let n = m.positions.len() as u32;
+        // A second cube sharing only vertex 7 with the first: a non-manifold vertex.
+        let c2 = generate::cube(1.0);
+        let off = m.positions[7] - c2.positions[0];
+        m.positions
+            .extend(c2.positions.iter().skip(1).map(|p| p + off));
+        for f in &c2.faces {
+            m.faces.push(f.map(|v| if v == 0 { 7 } else { v + n - 1 }));
+        }
+        let d = diagnose(&m);
+        assert_eq!(d.non_manifold_vertices, 1);
+        assert_eq!(d.components, 2);
+        assert_eq!(d.shell_state, ShellState::Irregular);
+    }
+}

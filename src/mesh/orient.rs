@@ -1,0 +1,426 @@
+//! Orientation: one winding across every manifold edge, then every component facing outward.
+//!
+//! 1. **Consistency.** Faces are walked breadth-first through manifold edges (see `topology`)
+//!    from the lowest-numbered face of each component; a neighbour that runs the shared edge the
+//!    same way is flipped. The component then takes the winding most of its faces had (ties: the
+//!    lowest face's), so the fewest faces change. A component where the walk meets itself with
+//!    the opposite parity (a Moebius band) is *non-orientable*: it is reported, not forced.
+//!    Edges shared by three or more faces are never walked across: they are reported.
+//! 2. **Outward, closed components.** A component is closed when each of its edges is used by
+//!    exactly two of its faces in opposite directions. Its signed volume
+//!    `V = sum (a - o) . ((b - o) x (c - o)) / 6` is positive when it faces outward; a
+//!    component with negative volume is flipped whole. A flat closed component
+//!    (`|V| <= FLAT_VOLUME_REL * diagonal^3`) keeps its winding.
+//! 3. **Outward, open components** (a garment, a seat shell, a body with a hole). The rule is
+//!    the generalized winding number `w(x) = sum over faces of solid angle / 4 pi` (Jacobson et
+//!    al. 2013), evaluated at the centroids of up to [`WINDING_SAMPLES`] faces of the component
+//!    against the component's other faces, averaged with area weights. For a closed outward
+//!    surface `w` is +1/2 on the surface; for an open one it stays positive when the normals
+//!    point to the convex side, away from the space the surface wraps. A component with a
+//!    negative mean is flipped whole; a mean of zero (a flat sheet, a lone triangle) keeps its
+//!    majority winding.
+//!
+//! [`plan`] computes all of this without touching the mesh; [`apply`] flips the faces. Running
+//! [`orient`] twice changes nothing the second time.
+
+use super::topology::{is_index_degenerate, Topology, NON_MANIFOLD};
+use super::TriMesh;
+use crate::math::{tol, Point3};
+use rayon::prelude::*;
+use serde::Serialize;
+
+/// How many faces of an open component sample its winding number.
+pub const WINDING_SAMPLES: usize = 64;
+
+/// What the plan found about one component.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ComponentInfo {
+    /// Faces in the component.
+    pub faces: usize,
+    /// Lowest face index.
+    pub first_face: usize,
+    /// Every edge used by exactly two of its faces in opposite directions (once consistent).
+    pub closed: bool,
+    /// One winding exists across all its manifold edges.
+    pub orientable: bool,
+    /// Faces that disagree with the winding most of the component's faces have.
+    pub inconsistent_faces: usize,
+    /// Signed volume with the majority winding (closed components only).
+    pub volume: Option<f64>,
+    /// Mean generalized winding number with the majority winding (open components only).
+    pub winding: Option<f64>,
+    /// The whole component must flip to face outward.
+    pub inverted: bool,
+    /// No side could be preferred (flat); the majority winding was kept.
+    pub undecided: bool,
+}
+
+/// The orientation plan: which faces to flip, and why.
+#[derive(Debug, Clone)]
+pub struct Plan {
+    /// Per face: flip it.
+    pub flip: Vec<bool>,
+    /// Per face: its component (`u32::MAX` for faces with a repeated corner).
+    pub label: Vec<u32>,
+    /// Per component.
+    pub components: Vec<ComponentInfo>,
+    /// Edges shared by three or more faces.
+    pub non_manifold_edges: usize,
+}
+
+/// What orienting did, as the convert report lists it.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct OrientReport {
+    /// Faces whose winding was reversed.
+    pub flipped_faces: usize,
+    /// Faces that disagreed with their component's majority winding.
+    pub consistency_flips: usize,
+    /// Components flipped whole to face outward.
+    pub inverted_components: usize,
+    /// Components.
+    pub components: usize,
+    /// Closed components.
+    pub closed_components: usize,
+    /// Open components.
+    pub open_components: usize,
+    /// Components that cannot be wound consistently.
+    pub non_orientable_components: usize,
+    /// Components with no preferred side (kept as they were).
+    pub undecided_components: usize,
+    /// Edges shared by three or more faces (left alone).
+    pub non_manifold_edges: usize,
+}
+
+impl Plan {
+    /// Whether the mesh as it is already has the planned winding.
+    pub fn is_noop(&self) -> bool {
+        !self.flip.iter().any(|&f| f)
+    }
+
+    /// The summary of this plan.
+    pub fn report(&self) -> OrientReport {
+        let c = &self.components;
+        OrientReport {
+            flipped_faces: self.flip.iter().filter(|&&f| f).count(),
+            consistency_flips: c.iter().map(|k| k.inconsistent_faces).sum(),
+            inverted_components: c.iter().filter(|k| k.inverted).count(),
+            components: c.len(),
+            closed_components: c.iter().filter(|k| k.closed).count(),
+            open_components: c.iter().filter(|k| !k.closed).count(),
+            non_orientable_components: c.iter().filter(|k| !k.orientable).count(),
+            undecided_components: c.iter().filter(|k| k.undecided).count(),
+            non_manifold_edges: self.non_manifold_edges,
+        }
+    }
+}
+
+/// Plans the orientation of `mesh` (see the module docs). With `outward` false only
+/// consistency is planned.
+pub fn plan(mesh: &TriMesh, topo: &Topology, outward: bool) -> Plan {
+    let nf = mesh.faces.len();
+    let mut flip = vec![false; nf];
+    let mut label = vec![u32::MAX; nf];
+    let mut comps: Vec<ComponentInfo> = Vec::new();
+    let mut members: Vec<Vec<u32>> = Vec::new();
+    let mut queue = std::collections::VecDeque::new();
+    for seed in 0..nf {
+        if label[seed] != u32::MAX || is_index_degenerate(&mesh.faces[seed]) {
+            continue;
+        }
+        let c = comps.len() as u32;
+        let mut list = vec![seed as u32];
+        let mut orientable = true;
+        label[seed] = c;
+        queue.push_back(seed);
+        while let Some(f) = queue.pop_front() {
+            for i in 0..3 {
+                let h = f * 3 + i;
+                if !topo.is_manifold(h) {
+                    continue;
+                }
+                let g = topo.opp[h] as usize / 3;
+                let want = flip[f] ^ topo.same_direction(mesh, h);
+                if label[g] == u32::MAX {
+                    label[g] = c;
+                    flip[g] = want;
+                    list.push(g as u32);
+                    queue.push_back(g);
+                } else if flip[g] != want {
+                    orientable = false;
+                }
+            }
+        }
+        // Follow the winding most of the component's faces have (ties: the lowest face's).
+        let mut inconsistent = list.iter().filter(|&&f| flip[f as usize]).count();
+        if 2 * inconsistent > list.len() {
+            for &f in &list {
+                flip[f as usize] = !flip[f as usize];
+            }
+            inconsistent = list.len() - inconsistent;
+        }
+        comps.push(ComponentInfo {
+            faces: list.len(),
+            first_face: seed,
+            closed: true,
+            orientable,
+            inconsistent_faces: inconsistent,
+            volume: None,
+            winding: None,
+            inverted: false,
+            undecided: false,
+        });
+        members.push(list);
+    }
+
+    // Closedness: no boundary half-edge; each non-manifold edge used twice, oppositely, per component.
+    let mut nm: Vec<(u32, u32, u32, i8)> = Vec::new();
+    let mut nm_edges: Vec<(u32, u32)> = Vec::new();
+    for f in 0..nf {
+        let c = label[f];
+        if c == u32::MAX {
+            continue;
+        }
+        for i in 0..3 {
+            let h = f * 3 + i;
+            match topo.opp[h] {
+                o if o < NON_MANIFOLD => {}
+                NON_MANIFOLD => {
+                    let mut a = mesh.faces[f][i];
+                    let mut b = mesh.faces[f][(i + 1) % 3];
+                    if flip[f] {
+                        std::mem::swap(&mut a, &mut b);
+                    }
+                    let dir = if a < b { 1 } else { -1 };
+                    nm.push((c, a.min(b), a.max(b), dir));
+                    nm_edges.push((a.min(b), a.max(b)));
+                }
+                _ => comps[c as usize].closed = false,
+            }
+        }
+    }
+    nm.sort_unstable();
+    for group in nm.chunk_by(|x, y| (x.0, x.1, x.2) == (y.0, y.1, y.2)) {
+        let c = group[0].0 as usize;
+        let sum: i32 = group.iter().map(|g| i32::from(g.3)).sum();
+        if group.len() != 2 {
+            comps[c].closed = false;
+        } else if sum != 0 {
+            comps[c].orientable = false;
+        }
+    }
+    nm_edges.sort_unstable();
+    nm_edges.dedup();
+
+    let bbox = mesh.bbox();
+    let d = bbox.map_or(0.0, |b| b.diagonal());
+    let origin = bbox.map_or(Point3::origin(), |b| b.center());
+    for (c, info) in comps.iter_mut().enumerate() {
+        let list = &members[c];
+        if info.closed {
+            let v = signed_volume(mesh, list, &flip, origin);
+            info.volume = Some(v);
+            if outward && info.orientable {
+                if v.abs() <= tol::FLAT_VOLUME_REL * d * d * d {
+                    info.undecided = true;
+                } else {
+                    info.inverted = v < 0.0;
+                }
+            }
+        } else {
+            let w = mean_winding(mesh, list, &flip);
+            info.winding = Some(w);
+            if outward && info.orientable {
+                if w.abs() <= tol::WINDING_TIE {
+                    info.undecided = true;
+                } else {
+                    info.inverted = w < 0.0;
+                }
+            }
+        }
+        if info.inverted {
+            for &f in list {
+                flip[f as usize] = !flip[f as usize];
+            }
+        }
+    }
+    Plan {
+        flip,
+        label,
+        components: comps,
+        non_manifold_edges: nm_edges.len(),
+    }
+}
+
+fn signed_volume(mesh: &TriMesh, faces: &[u32], flip: &[bool], origin: Point3) -> f64 {
+    let mut v = 0.0;
+    for &f in faces {
+        let [a, b, c] = mesh.corners(f as usize);
+        let t = (a - origin).dot(&(b - origin).cross(&(c - origin)));
+        v += if flip[f as usize] { -t } else { t };
+    }
+    v / 6.0
+}
+
+/// Solid angle of triangle (a, b, c) seen from `x` (Van Oosterom and Strackee): positive when
+/// `x` sees the triangle's back.
+#[inline]
+pub fn solid_angle(x: &Point3, a: &Point3, b: &Point3, c: &Point3) -> f64 {
+    let (a, b, c) = (a - x, b - x, c - x);
+    let (la, lb, lc) = (a.norm(), b.norm(), c.norm());
+    let num = a.dot(&b.cross(&c));
+    let den = la * lb * lc + a.dot(&b) * lc + b.dot(&c) * la + c.dot(&a) * lb;
+    2.0 * num.atan2(den)
+}
+
+/// Area-weighted mean generalized winding number of a component at sampled face centroids.
+fn mean_winding(mesh: &TriMesh, faces: &[u32], flip: &[bool]) -> f64 {
+    if faces.len() < 2 {
+        return 0.0;
+    }
+    let step = faces.len().div_ceil(WINDING_SAMPLES);
+    let samples: Vec<u32> = faces.iter().step_by(step).copied().collect();
+    let parts: Vec<(f64, f64)> = samples
+        .par_iter()
+        .map(|&s| {
+            let [a, b, c] = mesh.corners(s as usize);
+            let x = Point3::from((a.coords + b.coords + c.coords) / 3.0);
+            let area = mesh.face_area(s as usize);
+            let mut w = 0.0;
+            for &f in faces {
+                if f == s {
+                    continue;
+                }
+                let [p, q, r] = mesh.corners(f as usize);
+                let o = solid_angle(&x, &p, &q, &r);
+                w += if flip[f as usize] { -o } else { o };
+            }
+            (area * w / (4.0 * std::f64::consts::PI), area)
+        })
+        .collect();
+    let (sw, sa) = parts
+        .iter()
+        .fold((0.0, 0.0), |(w, a), p| (w + p.0, a + p.1));
+    if sa > 0.0 {
+        sw / sa
+    } else {
+        0.0
+    }
+}
+
+/// Flips the faces a plan marks.
+pub fn apply(mesh: &mut TriMesh, plan: &Plan) {
+    for (f, &fl) in plan.flip.iter().enumerate() {
+        if fl {
+            mesh.flip_face(f);
+        }
+    }
+}
+
+/// Plans and applies the orientation; returns the plan.
+pub fn orient(mesh: &mut TriMesh, outward: bool) -> Plan {
+    let topo = Topology::build(mesh);
+    let p = plan(mesh, &topo, outward);
+    apply(mesh, &p);
+    p
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::generate;
+
+    #[test]
+    fn inside_out_cube_is_flipped_whole() {
+        let mut m = generate::cube(1.0);
+        for f in 0..m.faces.len() {
+            m.flip_face(f);
+        }
+        let p = orient(&mut m, true);
+        assert_eq!(p.report().flipped_faces, 12);
+        assert_eq!(p.report().inverted_components, 1);
+        assert!((m.signed_volume() - 1.0).abs() < 1e-12);
+        assert!(orient(&mut m, true).is_noop());
+    }
+
+    #[test]
+    fn solid_angle_of_closed_surface_is_four_pi_inside() {
+        let m = generate::icosphere(2);
+        let x = Point3::new(0.1, -0.2, 0.3);
+        let total: f64 = (0..m.faces.len())
+            .map(|f| {
+                let [a, b, c] = m.corners(f);
+                solid_angle(&x, &a, &b, &c)
+            })
+            .sum();
+        assert!((total - 4.0 * std::f64::consts::PI).abs() < 1e-9);
+        let y = Point3::new(2.0, 0.0, 0.0);
+        let outside: f64 = (0..m.faces.len())
+            .map(|f| {
+                let [a, b, c] = m.corners(f);
+                solid_angle(&y, &a, &b, &c)
+            })
+            .sum();
+        assert!(outside.abs() < 1e-9);
+    }
+
+    #[test]
+    fn open_hemisphere_faces_its_convex_side() {
+        // A sphere with its lower half removed: the normals should point away from the centre.
+        let full = generate::icosphere(3);
+        let keep: Vec<bool> = (0..full.faces.len())
+            .map(|f| full.corners(f).iter().map(|p| p.z).sum::<f64>() > 0.0)
+            .collect();
+        let mut m = full.clone();
+        m.retain_faces(&keep);
+        for f in 0..m.faces.len() {
+            m.flip_face(f);
+        }
+        let p = orient(&mut m, true);
+        assert_eq!(p.report().open_components, 1);
+        assert_eq!(p.report().inverted_components, 1);
+        for f in 0..m.faces.len() {
+            let [a, b, c] = m.corners(f);
+            let centroid = (a.coords + b.coords + c.coords) / 3.0;
+            assert!(m.face_cross(f).dot(&centroid) > 0.0);
+        }
+    }
+
+    #[test]
+    fn flat_sheet_keeps_the_first_faces_winding() {
+        let p = vec![
+            Point3::new(0.0, 0.0, 0.0),
+            Point3::new(1.0, 0.0, 0.0),
+            Point3::new(1.0, 1.0, 0.0),
+            Point3::new(0.0, 1.0, 0.0),
+        ];
+        // First face points down (-z); the second disagrees.
+        let mut m = TriMesh::new(p, vec![[0, 2, 1], [0, 2, 3]]);
+        let plan = orient(&mut m, true);
+        assert_eq!(plan.report().undecided_components, 1);
+        assert_eq!(m.faces, vec![[0, 2, 1], [0, 3, 2]]);
+    }
+
+    #[test]
+    fn moebius_band_is_non_orientable() {
+        let n = 12;
+        let mut pos = Vec::new();
+        for i in 0..n {
+            let t = 2.0 * std::f64::consts::PI * i as f64 / n as f64;
+            let (s, c) = (t / 2.0).sin_cos();
+            for w in [-0.3, 0.3] {
+                let r = 1.0 + w * c;
+                pos.push(Point3::new(r * t.cos(), r * t.sin(), w * s));
+            }
+        }
+        let mut faces = Vec::new();
+        for i in 0..n {
+            let (a, b) = (2 * i as u32, 2 * i as u32 + 1);
+            let (c, d) = if i + 1 < n { (a + 2, b + 2) } else { (1, 0) };
+            faces.push([a, c, b]);
+            faces.push([b, c, d]);
+        }
+        let mut m = TriMesh::new(pos, faces);
+        let plan = orient(&mut m, true);
+        assert_eq!(plan.report().non_orientable_components, 1);
+    }
+}

@@ -1,0 +1,466 @@
+//! Polygons to triangles: the paper's quad split, the shorter-diagonal split, and ear clipping
+//! for n-gons.
+//!
+//! A face record lists corner indices in winding order. Before splitting, a polygon is cleaned:
+//! consecutive repeated corners go (an AutoCAD 3DFACE triangle repeats its third corner as the
+//! fourth), and a corner list that repeats itself (`1 2 3 4 1 2 3 4 ...`) is cut to one period.
+//!
+//! * A quad `(r1, r2, r3, r4)` is split `(r1, r2, r3) + (r3, r4, r1)` as the paper's LISP export
+//!   does ([`QuadSplit::Paper`]), or along its shorter diagonal ([`QuadSplit::Shortest`]). A
+//!   concave quad is always split through its reflex corner, the only split without overlap.
+//! * An n-gon (n >= 5) is projected on the plane of its Newell normal and ear-clipped: an ear is a
+//!   convex corner whose triangle holds no other corner and whose new diagonal crosses no edge.
+//!   Corners that coincide with the ear's own corners (the two sides of a bridge to a hole) do not
+//!   block it. Every triangle keeps the polygon's winding, so the triangle areas sum to the
+//!   polygon's area: no overlaps.
+
+use crate::math::{newell_normal, orient2d, tol, Point2, Point3};
+use serde::Serialize;
+use std::fmt;
+use std::str::FromStr;
+
+/// How a four-corner face becomes two triangles.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum QuadSplit {
+    /// `(r1, r2, r3) + (r3, r4, r1)`, as the paper's LISP export writes it (default).
+    #[default]
+    Paper,
+    /// Along the shorter diagonal (better-shaped triangles).
+    Shortest,
+}
+
+impl FromStr for QuadSplit {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "paper" => Ok(QuadSplit::Paper),
+            "shortest" => Ok(QuadSplit::Shortest),
+            _ => Err(format!(
+                "unknown quad split '{s}': expected 'paper' or 'shortest'"
+            )),
+        }
+    }
+}
+
+impl fmt::Display for QuadSplit {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            QuadSplit::Paper => "paper",
+            QuadSplit::Shortest => "shortest",
+        })
+    }
+}
+
+/// What triangulation found and did, summed over all polygons of a file.
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize)]
+pub struct PolygonStats {
+    /// Face records read (any corner count).
+    pub polygons: usize,
+    /// Triangles produced.
+    pub triangles: usize,
+    /// Four-corner faces split in two.
+    pub quads: usize,
+    /// Quads whose fourth corner is off the plane of the first three.
+    pub nonplanar_quads: usize,
+    /// Quads split through their reflex corner (whatever the split rule).
+    pub concave_quads: usize,
+    /// Faces of five or more corners, ear-clipped.
+    pub ngons: usize,
+    /// Four-corner records with a repeated corner, read as one triangle (AutoCAD 3DFACE).
+    pub collapsed_quads: usize,
+    /// Records that listed their corners more than once around, cut to one period.
+    pub periodic_polygons: usize,
+    /// Records with fewer than three distinct corners (dropped).
+    pub degenerate_polygons: usize,
+    /// Self-intersecting polygons that could not be triangulated without overlap.
+    pub overlapping_polygons: usize,
+}
+
+/// Triangulates one face record, appending triangles to `out`.
+///
+/// ```
+/// use drapekit::math::Point3;
+/// use drapekit::mesh::polygon::{triangulate, PolygonStats, QuadSplit};
+/// let p = [Point3::new(0., 0., 0.), Point3::new(1., 0., 0.), Point3::new(1., 1., 0.), Point3::new(0., 1., 0.)];
+/// let (mut out, mut st) = (Vec::new(), PolygonStats::default());
+/// triangulate(&p, &[0, 1, 2, 3], QuadSplit::Paper, &mut out, &mut st);
+/// assert_eq!(out, vec![[0, 1, 2], [2, 3, 0]]);
+/// ```
+pub fn triangulate(
+    positions: &[Point3],
+    corners: &[u32],
+    split: QuadSplit,
+    out: &mut Vec<[u32; 3]>,
+    stats: &mut PolygonStats,
+) {
+    stats.polygons += 1;
+    if corners.len() == 3 {
+        // Triangles pass through untouched, degenerate or not: cleaning decides about them.
+        out.push([corners[0], corners[1], corners[2]]);
+        stats.triangles += 1;
+        return;
+    }
+    let mut ring: Vec<u32> = corners.to_vec();
+    ring.dedup();
+    while ring.len() > 1 && ring.first() == ring.last() {
+        ring.pop();
+    }
+    let had_repeats = ring.len() != corners.len();
+    if let Some(period) = smallest_period(&ring) {
+        ring.truncate(period);
+        stats.periodic_polygons += 1;
+    }
+    let mut distinct = ring.clone();
+    distinct.sort_unstable();
+    distinct.dedup();
+    if distinct.len() < 3 {
+        stats.degenerate_polygons += 1;
+        return;
+    }
+    if had_repeats && corners.len() == 4 && ring.len() == 3 {
+        stats.collapsed_quads += 1;
+    }
+    let before = out.len();
+    match ring.len() {
+        3 => out.push([ring[0], ring[1], ring[2]]),
+        4 => split_quad(
+            positions,
+            [ring[0], ring[1], ring[2], ring[3]],
+            split,
+            out,
+            stats,
+        ),
+        _ => {
+            stats.ngons += 1;
+            ear_clip(positions, &ring, out, stats);
+        }
+    }
+    stats.triangles += out.len() - before;
+}
+
+/// The smallest period `p < n` with `ring[i] == ring[i % p]`, if the ring repeats itself.
+fn smallest_period(ring: &[u32]) -> Option<usize> {
+    let n = ring.len();
+    (3..n)
+        .filter(|&p| n.is_multiple_of(p))
+        .find(|&p| (p..n).all(|i| ring[i] == ring[i % p]))
+}
+
+fn split_quad(
+    positions: &[Point3],
+    q: [u32; 4],
+    split: QuadSplit,
+    out: &mut Vec<[u32; 3]>,
+    stats: &mut PolygonStats,
+) {
+    stats.quads += 1;
+    let p = q.map(|i| positions[i as usize]);
+    let d02 = (p[2] - p[0]).norm();
+    let d13 = (p[3] - p[1]).norm();
+    let n012 = (p[1] - p[0]).cross(&(p[2] - p[0]));
+    let nn = n012.norm();
+    let off_plane = if nn > 0.0 {
+        ((p[3] - p[0]).dot(&n012) / nn).abs()
+    } else {
+        0.0
+    };
+    if off_plane > tol::NONPLANAR_QUAD_REL * d02.max(d13) {
+        stats.nonplanar_quads += 1;
+    }
+    // Convexity about the Newell normal: a reflex corner turns against it.
+    let normal = newell_normal(p.iter().copied());
+    let reflex: Vec<usize> = (0..4)
+        .filter(|&i| {
+            let a = p[(i + 3) % 4];
+            let b = p[i];
+            let c = p[(i + 1) % 4];
+            (b - a).cross(&(c - b)).dot(&normal) < 0.0
+        })
+        .collect();
+    let through = match reflex.as_slice() {
+        [r] => {
+            stats.concave_quads += 1;
+            *r % 2
+        }
+        [] => match split {
+            QuadSplit::Paper => 0,
+            QuadSplit::Shortest => usize::from(d13 < d02),
+        },
+        _ => {
+            // Two or more reflex corners: a bow-tie, which no split can mend.
+            stats.overlapping_polygons += 1;
+            0
+        }
+    };
+    if through == 0 {
+        out.push([q[0], q[1], q[2]]);
+        out.push([q[2], q[3], q[0]]);
+    } else {
+        out.push([q[1], q[2], q[3]]);
+        out.push([q[3], q[0], q[1]]);
+    }
+}
+
+/// Ear clipping of a cleaned ring of five or more corners.
+fn ear_clip(positions: &[Point3], ring: &[u32], out: &mut Vec<[u32; 3]>, stats: &mut PolygonStats) {
+    let n = ring.len();
+    let normal = newell_normal(ring.iter().map(|&i| positions[i as usize]));
+    let k = normal.iamax();
+    if normal[k] == 0.0 {
+        stats.degenerate_polygons += 1;
+        return;
+    }
+    // Drop axis k; the cyclic order of the other two keeps the winding counter-clockwise.
+    let (u, v) = if normal[k] > 0.0 {
+        ((k + 1) % 3, (k + 2) % 3)
+    } else {
+        ((k + 2) % 3, (k + 1) % 3)
+    };
+    let pts: Vec<Point2> = ring
+        .iter()
+        .map(|&i| {
+            let p = positions[i as usize];
+            Point2::new(p[u], p[v])
+        })
+        .collect();
+    let mut next: Vec<usize> = (0..n).map(|i| (i + 1) % n).collect();
+    let mut prev: Vec<usize> = (0..n).map(|i| (i + n - 1) % n).collect();
+    let mut remaining = n;
+    let mut i = 0;
+    let mut misses = 0;
+    // Strictness: 0 = proper ears only, 1 = allow flat ears, 2 = forced clip.
+    let mut level = 0;
+    let mut overlapped = false;
+    while remaining > 3 {
+        let (a, c) = (prev[i], next[i]);
+        let ok = match level {
+            0 => is_ear(&pts, &next, a, i, c, remaining, false),
+            1 => is_ear(&pts, &next, a, i, c, remaining, true),
+            _ => true,
+        };
+        if ok {
+            out.push([ring[a], ring[i], ring[c]]);
+            next[a] = c;
+            prev[c] = a;
+            remaining -= 1;
+            i = c;
+            misses = 0;
+            level = 0;
+            continue;
+        }
+        i = next[i];
+        misses += 1;
+        if misses > remaining {
+            misses = 0;
+            level += 1;
+            if level == 2 {
+                overlapped = true;
+                // Clip the most convex corner left.
+                let mut best = i;
+                let mut best_area = f64::NEG_INFINITY;
+                let mut j = i;
+                for _ in 0..remaining {
+                    let area = orient2d(&pts[prev[j]], &pts[j], &pts[next[j]]);
+                    if area > best_area {
+                        best_area = area;
+                        best = j;
+                    }
+                    j = next[j];
+                }
+                i = best;
+            }
+        }
+    }
+    out.push([ring[prev[i]], ring[i], ring[next[i]]]);
+    if overlapped {
+        stats.overlapping_polygons += 1;
+    }
+}
+
+fn is_ear(
+    pts: &[Point2],
+    next: &[usize],
+    a: usize,
+    b: usize,
+    c: usize,
+    remaining: usize,
+    allow_flat: bool,
+) -> bool {
+    let (pa, pb, pc) = (pts[a], pts[b], pts[c]);
+    let area = orient2d(&pa, &pb, &pc);
+    if area < 0.0 || (area == 0.0 && !allow_flat) {
+        return false;
+    }
+    let coincides = |q: &Point2| *q == pa || *q == pb || *q == pc;
+    let mut j = next[c];
+    for _ in 0..remaining.saturating_sub(3) {
+        let q = pts[j];
+        if !coincides(&q)
+            && area > 0.0
+            && orient2d(&pa, &pb, &q) >= 0.0
+            && orient2d(&pb, &pc, &q) >= 0.0
+            && orient2d(&pc, &pa, &q) >= 0.0
+        {
+            return false;
+        }
+        j = next[j];
+    }
+    // The new diagonal c -> a must not cross any remaining edge.
+    let mut j = c;
+    loop {
+        let k = next[j];
+        if k == a {
+            break;
+        }
+        let (q0, q1) = (pts[j], pts[k]);
+        let shares = q0 == pa || q0 == pc || q1 == pa || q1 == pc;
+        if !shares && segments_cross(&pc, &pa, &q0, &q1) {
+            return false;
+        }
+        j = k;
+    }
+    true
+}
+
+/// Whether segments (p0, p1) and (q0, q1) cross at a point interior to both.
+fn segments_cross(p0: &Point2, p1: &Point2, q0: &Point2, q1: &Point2) -> bool {
+    let d1 = orient2d(p0, p1, q0);
+    let d2 = orient2d(p0, p1, q1);
+    let d3 = orient2d(q0, q1, p0);
+    let d4 = orient2d(q0, q1, p1);
+    d1 * d2 < 0.0 && d3 * d4 < 0.0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn run(p: &[Point3], ring: &[u32], split: QuadSplit) -> (Vec<[u32; 3]>, PolygonStats) {
+        let mut out = Vec::new();
+        let mut st = PolygonStats::default();
+        triangulate(p, ring, split, &mut out, &mut st);
+        (out, st)
+    }
+
+    fn pts2(xy: &[(f64, f64)]) -> Vec<Point3> {
+        xy.iter().map(|&(x, y)| Point3::new(x, y, 0.0)).collect()
+    }
+
+    /// Sum of signed triangle areas along +z and the sum of their absolute values.
+    fn areas(p: &[Point3], tris: &[[u32; 3]]) -> (f64, f64) {
+        let mut s = 0.0;
+        let mut a = 0.0;
+        for t in tris {
+            let [x, y, z] = t.map(|i| p[i as usize]);
+            let ar = 0.5 * (y - x).cross(&(z - x)).z;
+            s += ar;
+            a += ar.abs();
+        }
+        (s, a)
+    }
+
+    #[test]
+    fn paper_and_shortest_splits() {
+        // A long thin quad: diagonal 1-3 is the shorter one.
+        let p = pts2(&[(0.0, 0.0), (10.0, 0.0), (11.0, 1.0), (1.0, 1.0)]);
+        let (paper, _) = run(&p, &[0, 1, 2, 3], QuadSplit::Paper);
+        assert_eq!(paper, vec![[0, 1, 2], [2, 3, 0]]);
+        let (short, _) = run(&p, &[0, 1, 2, 3], QuadSplit::Shortest);
+        assert_eq!(short, vec![[1, 2, 3], [3, 0, 1]]);
+    }
+
+    #[test]
+    fn concave_quad_splits_through_reflex_corner() {
+        // Dart: corner 1 is reflex, so the paper diagonal 0-2 would overlap.
+        let p = pts2(&[(0.0, 0.0), (1.0, 0.3), (2.0, 0.0), (1.0, 2.0)]);
+        let p = vec![p[0], p[1], p[2], p[3]];
+        let (t, st) = run(&p, &[0, 1, 2, 3], QuadSplit::Paper);
+        assert_eq!(st.concave_quads, 1);
+        let (signed, abs) = areas(&p, &t);
+        assert!((signed - abs).abs() < 1e-12, "overlap: {t:?}");
+    }
+
+    #[test]
+    fn autocad_triangle_with_repeated_corner() {
+        let p = pts2(&[(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)]);
+        let (t, st) = run(&p, &[0, 1, 2, 2], QuadSplit::Paper);
+        assert_eq!(t, vec![[0, 1, 2]]);
+        assert_eq!(st.collapsed_quads, 1);
+        assert_eq!(st.quads, 0);
+    }
+
+    #[test]
+    fn periodic_ring_is_cut_to_one_period() {
+        let p = pts2(&[(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)]);
+        let ring: Vec<u32> = (0..40).map(|i| i % 4).collect();
+        let (t, st) = run(&p, &ring, QuadSplit::Paper);
+        assert_eq!(t.len(), 2);
+        assert_eq!(st.periodic_polygons, 1);
+    }
+
+    #[test]
+    fn degenerate_record_is_dropped() {
+        let p = pts2(&[(0.0, 0.0), (1.0, 0.0)]);
+        let (t, st) = run(&p, &[0, 1, 1, 0], QuadSplit::Paper);
+        assert!(t.is_empty());
+        assert_eq!(st.degenerate_polygons, 1);
+    }
+
+    #[test]
+    fn concave_ngon_has_no_overlap() {
+        // A comb: 5 teeth, 22 corners, strongly concave.
+        let mut xy = vec![(0.0, 0.0), (10.0, 0.0)];
+        for t in (0..5).rev() {
+            let x = 2.0 * t as f64;
+            xy.push((x + 2.0, 5.0));
+            xy.push((x + 1.0, 5.0));
+            xy.push((x + 1.0, 1.0));
+            xy.push((x, 1.0));
+        }
+        let p = pts2(&xy);
+        let ring: Vec<u32> = (0..p.len() as u32).collect();
+        let (t, st) = run(&p, &ring, QuadSplit::Paper);
+        assert_eq!(t.len(), p.len() - 2);
+        assert_eq!(st.overlapping_polygons, 0);
+        let (signed, abs) = areas(&p, &t);
+        let shoelace = 0.5 * newell_normal(p.iter().copied()).z;
+        assert!((signed - shoelace).abs() < 1e-9 && (abs - shoelace).abs() < 1e-9);
+    }
+
+    #[test]
+    fn clockwise_ngon_keeps_its_winding() {
+        let xy: Vec<(f64, f64)> = (0..7)
+            .map(|i| (-(i as f64) * 0.9).sin_cos())
+            .map(|(s, c)| (c, s))
+            .collect();
+        let p = pts2(&xy);
+        let ring: Vec<u32> = (0..7).collect();
+        let (t, _) = run(&p, &ring, QuadSplit::Paper);
+        for tri in &t {
+            let [a, b, c] = tri.map(|i| p[i as usize]);
+            assert!((b - a).cross(&(c - a)).z < 0.0);
+        }
+    }
+
+    #[test]
+    fn square_with_bridged_hole() {
+        // Outer square CCW, a bridge to an inner square walked CW, back along the bridge.
+        let p = pts2(&[
+            (0.0, 0.0),
+            (4.0, 0.0),
+            (4.0, 4.0),
+            (0.0, 4.0),
+            (1.0, 1.0),
+            (1.0, 3.0),
+            (3.0, 3.0),
+            (3.0, 1.0),
+        ]);
+        let ring = [0, 1, 2, 3, 0, 4, 5, 6, 7, 4];
+        let (t, st) = run(&p, &ring, QuadSplit::Paper);
+        assert_eq!(st.overlapping_polygons, 0);
+        let (signed, abs) = areas(&p, &t);
+        assert!((signed - 12.0).abs() < 1e-12, "area {signed}");
+        assert!((abs - 12.0).abs() < 1e-12, "overlap: {abs}");
+    }
+}
