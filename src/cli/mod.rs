@@ -12,6 +12,7 @@ use clap::{Args, Parser, Subcommand};
 use std::io::IsTerminal;
 use std::process::ExitCode;
 
+pub use bench::SplitMix;
 pub use convert::ConvertReport;
 
 /// drapekit: clean meshes from CAD exports, fitted mannequins, quick cloth drapes.

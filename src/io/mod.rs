@@ -204,6 +204,17 @@ pub fn read_bytes(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<ReadO
     Ok(out)
 }
 
+/// Refuses meshes whose vertex count does not fit 32-bit indices.
+fn check_vertex_count(path: &Path, n: usize) -> Result<(), IoError> {
+    if n >= u32::MAX as usize {
+        return Err(IoError::TooLarge {
+            path: path.to_path_buf(),
+            count: n as u64,
+        });
+    }
+    Ok(())
+}
+
 /// How to write a mesh file.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct WriteOptions {

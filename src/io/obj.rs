@@ -15,7 +15,7 @@ use super::error::{IoError, Location, ProblemKind, Problems};
 use super::text::{self, show, words};
 use super::{ReadInfo, ReadOptions, ReadOutput};
 use crate::math::Point3;
-use crate::mesh::polygon::{triangulate, PolygonStats};
+use crate::mesh::polygon::Polygons;
 use crate::mesh::TriMesh;
 use std::collections::BTreeMap;
 use std::io::Write;
@@ -61,9 +61,10 @@ pub fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<ReadOutput,
     })?;
     let mut problems = Problems::default();
     let mut positions: Vec<Point3> = Vec::new();
-    // Faces: corner indices (0-based, maybe past the end until checked) and their line.
-    let mut corners: Vec<i64> = Vec::new();
-    let mut face_start: Vec<(usize, u64)> = Vec::new();
+    // Faces: corner indices (0-based, maybe past the end until checked) and their lines.
+    let mut polys = Polygons::default();
+    let mut face_lines: Vec<u64> = Vec::new();
+    let mut ring: Vec<u32> = Vec::new();
     let mut skipped: BTreeMap<String, (usize, u64)> = BTreeMap::new();
     let mut logical: Vec<u8> = Vec::new();
     let mut all_lines = text::lines(&text).peekable();
@@ -120,7 +121,7 @@ pub fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<ReadOutput,
                 }
             }
             b"f" | b"fo" => {
-                let start = corners.len();
+                ring.clear();
                 let count = positions.len() as i64;
                 let before = problems.count();
                 for tok in w {
@@ -130,30 +131,26 @@ pub fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<ReadOutput,
                         .and_then(|s| s.parse::<i64>().ok())
                     {
                         Some(0) => problems.line(ln, ProblemKind::ZeroIndex),
-                        Some(i) if i < 0 => {
-                            if count + i < 0 {
-                                problems.line(
-                                    ln,
-                                    ProblemKind::IndexOutOfRange {
-                                        index: i,
-                                        count: count as u64,
-                                    },
-                                );
-                            }
-                            corners.push(count + i);
-                        }
-                        Some(i) => corners.push(i - 1),
+                        Some(i) if (i < 0 && count + i < 0) || i > i64::from(u32::MAX) => problems
+                            .line(
+                                ln,
+                                ProblemKind::IndexOutOfRange {
+                                    index: i,
+                                    count: count as u64,
+                                },
+                            ),
+                        Some(i) if i < 0 => ring.push((count + i) as u32),
+                        Some(i) => ring.push((i - 1) as u32),
                         None => problems.line(ln, ProblemKind::BadIndex { token: show(tok) }),
                     }
                 }
-                let found = corners.len() - start;
-                if problems.count() != before {
-                    corners.truncate(start);
-                } else if found < 3 {
-                    problems.line(ln, ProblemKind::TooFewCorners { found });
-                    corners.truncate(start);
-                } else {
-                    face_start.push((start, ln));
+                if problems.count() == before {
+                    if ring.len() < 3 {
+                        problems.line(ln, ProblemKind::TooFewCorners { found: ring.len() });
+                    } else {
+                        polys.push(ring.iter().copied());
+                        face_lines.push(ln);
+                    }
                 }
             }
             k if SKIPPED.contains(&k) => {}
@@ -169,38 +166,23 @@ pub fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<ReadOutput,
         }
     }
     problems.check(path, FORMAT)?;
-    let n = positions.len() as i64;
+    // Forward references are checked now that every vertex is known.
+    let n = positions.len();
     let mut problems = Problems::default();
-    for (k, &(start, ln)) in face_start.iter().enumerate() {
-        let end = face_start.get(k + 1).map_or(corners.len(), |s| s.0);
-        for &c in &corners[start..end] {
-            if c >= n {
-                problems.line(
-                    ln,
-                    ProblemKind::IndexOutOfRange {
-                        index: c + 1,
-                        count: n as u64,
-                    },
-                );
-            }
+    for (ring, &ln) in polys.iter().zip(&face_lines) {
+        for &c in ring.iter().filter(|&&c| c as usize >= n) {
+            problems.line(
+                ln,
+                ProblemKind::IndexOutOfRange {
+                    index: i64::from(c) + 1,
+                    count: n as u64,
+                },
+            );
         }
     }
     problems.check(path, FORMAT)?;
-    if positions.len() >= u32::MAX as usize {
-        return Err(IoError::TooLarge {
-            path: path.to_path_buf(),
-            count: positions.len() as u64,
-        });
-    }
-    let mut faces = Vec::with_capacity(face_start.len());
-    let mut stats = PolygonStats::default();
-    let mut ring: Vec<u32> = Vec::new();
-    for (k, &(start, _)) in face_start.iter().enumerate() {
-        let end = face_start.get(k + 1).map_or(corners.len(), |s| s.0);
-        ring.clear();
-        ring.extend(corners[start..end].iter().map(|&c| c as u32));
-        triangulate(&positions, &ring, opts.quad_split, &mut faces, &mut stats);
-    }
+    super::check_vertex_count(path, n)?;
+    let (faces, stats) = polys.triangulate(&positions, opts.quad_split);
     let warnings = skipped
         .iter()
         .map(|(name, (count, line))| match name.as_str() {

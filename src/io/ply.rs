@@ -20,7 +20,7 @@ use super::error::{malformed, IoError, Location, ProblemKind, Problems};
 use super::text::{self, show};
 use super::{ReadInfo, ReadOptions, ReadOutput};
 use crate::math::Point3;
-use crate::mesh::polygon::{triangulate, PolygonStats};
+use crate::mesh::polygon::Polygons;
 use crate::mesh::TriMesh;
 use std::io::Write;
 use std::path::Path;
@@ -327,8 +327,9 @@ pub fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<ReadOutput,
     }
     let body = &bytes[header.body..];
     let mut positions: Vec<Point3> = Vec::new();
-    let mut corners: Vec<i64> = Vec::new();
-    let mut face_start: Vec<(usize, Location)> = Vec::new();
+    let mut polys = Polygons::default();
+    let mut face_at: Vec<Location> = Vec::new();
+    let mut ring: Vec<u32> = Vec::new();
     let mut reader: Box<dyn ValueSource> = match header.encoding {
         Encoding::Ascii => Box::new(AsciiSource {
             text: body,
@@ -354,8 +355,8 @@ pub fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<ReadOutput,
             positions.reserve(cap);
         }
         if r.indices.is_some() {
-            face_start.reserve(cap);
-            corners.reserve(cap.saturating_mul(3));
+            polys = Polygons::with_capacity(cap);
+            face_at.reserve(cap);
         }
         // Values a record needs at least: each scalar, and each list's length.
         let needed = el.props.len();
@@ -437,12 +438,19 @@ pub fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<ReadOutput,
                         }
                         let n = n as usize;
                         let is_faces = r.indices == Some(k);
-                        let start = corners.len();
+                        ring.clear();
                         for _ in 0..n {
                             let v = reader.value(it).map_err(|e| fail(e, read_values))?;
                             read_values += 1;
                             if is_faces {
-                                corners.push(v as i64);
+                                if v < 0.0 || v >= f64::from(u32::MAX) {
+                                    let kind = ProblemKind::IndexOutOfRange {
+                                        index: v as i64,
+                                        count: positions.len() as u64,
+                                    };
+                                    return Err(malformed(path, FMT, at.clone(), kind));
+                                }
+                                ring.push(v as u32);
                             }
                         }
                         if is_faces {
@@ -454,7 +462,8 @@ pub fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<ReadOutput,
                                     ProblemKind::TooFewCorners { found: n },
                                 ));
                             }
-                            face_start.push((start, at.clone()));
+                            polys.push(ring.iter().copied());
+                            face_at.push(at.clone());
                         }
                     }
                 }
@@ -476,38 +485,22 @@ pub fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<ReadOutput,
     if let Some(extra) = reader.leftover() {
         warnings.push(extra);
     }
-    let n = positions.len() as i64;
+    let n = positions.len();
     let mut problems = Problems::default();
-    for (k, (start, at)) in face_start.iter().enumerate() {
-        let end = face_start.get(k + 1).map_or(corners.len(), |s| s.0);
-        for &c in &corners[*start..end] {
-            if c < 0 || c >= n {
-                problems.push(
-                    at.clone(),
-                    ProblemKind::IndexOutOfRange {
-                        index: c,
-                        count: n as u64,
-                    },
-                );
-            }
+    for (ring, at) in polys.iter().zip(&face_at) {
+        for &c in ring.iter().filter(|&&c| c as usize >= n) {
+            problems.push(
+                at.clone(),
+                ProblemKind::IndexOutOfRange {
+                    index: i64::from(c),
+                    count: n as u64,
+                },
+            );
         }
     }
     problems.check(path, FMT)?;
-    if positions.len() >= u32::MAX as usize {
-        return Err(IoError::TooLarge {
-            path: path.to_path_buf(),
-            count: positions.len() as u64,
-        });
-    }
-    let mut faces = Vec::with_capacity(face_start.len());
-    let mut stats = PolygonStats::default();
-    let mut ring = Vec::new();
-    for (k, (start, _)) in face_start.iter().enumerate() {
-        let end = face_start.get(k + 1).map_or(corners.len(), |s| s.0);
-        ring.clear();
-        ring.extend(corners[*start..end].iter().map(|&c| c as u32));
-        triangulate(&positions, &ring, opts.quad_split, &mut faces, &mut stats);
-    }
+    super::check_vertex_count(path, n)?;
+    let (faces, stats) = polys.triangulate(&positions, opts.quad_split);
     let info = ReadInfo {
         format: match header.encoding {
             Encoding::Ascii => "ply-ascii",

@@ -19,7 +19,7 @@ use super::error::{malformed, IoError, Location, ProblemKind};
 use super::text::{self, show};
 use super::{ReadInfo, ReadOptions, ReadOutput};
 use crate::math::Point3;
-use crate::mesh::polygon::{triangulate, PolygonStats};
+use crate::mesh::polygon::{PolygonStats, Polygons};
 use crate::mesh::weld::ExactIndexer;
 use crate::mesh::TriMesh;
 use std::io::Write;
@@ -219,7 +219,7 @@ fn read_ascii(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<ReadOutpu
         }
     };
     let mut ix = ExactIndexer::with_capacity(1024);
-    let mut polys: Vec<Vec<u32>> = Vec::new();
+    let mut polys = Polygons::default();
     let mut solids = 0usize;
     let mut warnings = Vec::new();
     let mut nan_normals = 0usize;
@@ -353,15 +353,11 @@ fn read_ascii(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<ReadOutpu
         warnings.push(format!("{nan_normals} facet normal(s) are not finite (ignored: the winding defines the normal)"));
     }
     let positions = ix.into_positions();
-    let mut faces = Vec::with_capacity(polys.len());
-    let mut stats = PolygonStats::default();
-    for ring in &polys {
-        triangulate(&positions, ring, opts.quad_split, &mut faces, &mut stats);
-    }
+    let (faces, stats) = polys.triangulate(&positions, opts.quad_split);
     let info = ReadInfo {
         format: "stl-ascii".into(),
         vertices_in_file: positions.len(),
-        points: Some(polys.iter().map(Vec::len).sum()),
+        points: Some(polys.corner_count()),
         solids: Some(solids),
         polygons: stats,
         warnings,

@@ -22,7 +22,7 @@ use super::error::{IoError, Location, ProblemKind, Problems};
 use super::text::{self, show};
 use super::{ReadInfo, ReadOptions, ReadOutput};
 use crate::math::Point3;
-use crate::mesh::polygon::{triangulate, PolygonStats};
+use crate::mesh::polygon::Polygons;
 use crate::mesh::weld::ExactIndexer;
 use crate::mesh::TriMesh;
 use std::io::Write;
@@ -97,6 +97,8 @@ pub fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<ReadOutput,
     if let Some(b) = current.take() {
         items.push(Item::Block(b));
     }
+    // Layout problems would only echo the lines already reported: stop here if there are any.
+    std::mem::take(&mut problems).check(path, FORMAT)?;
 
     let sizes: Vec<usize> = items
         .iter()
@@ -137,26 +139,20 @@ pub fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<ReadOutput,
             .map(|i| if let Item::Face(p) = i { p.len() } else { 0 })
             .sum::<usize>();
     let mut ix = ExactIndexer::with_capacity(total_points / 2 + 8);
-    let mut polys: Vec<Vec<u32>> = Vec::new();
+    let mut polys = Polygons::with_capacity(total_points / 3);
     for item in &items {
         match item {
-            Item::Face(pts) => polys.push(pts.iter().map(|p| ix.index(*p)).collect()),
-            Item::Block(b) if block_mode => {
-                polys.push(b.points.iter().map(|(_, p)| ix.index(*p)).collect())
-            }
+            Item::Face(pts) => polys.push(pts.iter().map(|p| ix.index(*p))),
+            Item::Block(b) if block_mode => polys.push(b.points.iter().map(|(_, p)| ix.index(*p))),
             Item::Block(b) => {
                 for tri in b.points.chunks_exact(3) {
-                    polys.push(tri.iter().map(|(_, p)| ix.index(*p)).collect());
+                    polys.push(tri.iter().map(|(_, p)| ix.index(*p)));
                 }
             }
         }
     }
     let positions = ix.into_positions();
-    let mut faces = Vec::with_capacity(polys.len() * 2);
-    let mut stats = PolygonStats::default();
-    for poly in &polys {
-        triangulate(&positions, poly, opts.quad_split, &mut faces, &mut stats);
-    }
+    let (faces, stats) = polys.triangulate(&positions, opts.quad_split);
     let layout = match (point_lines > 0, face_lines > 0, block_mode) {
         (true, true, _) => "mixed",
         (false, true, _) => "face per line",

@@ -5,7 +5,6 @@
 use super::topology::is_index_degenerate;
 use super::TriMesh;
 use crate::math::tol;
-use rustc_hash::FxHashSet;
 
 /// Which faces are degenerate, and how many.
 pub fn find_degenerate(mesh: &TriMesh) -> (Vec<bool>, usize) {
@@ -26,22 +25,47 @@ pub fn find_degenerate(mesh: &TriMesh) -> (Vec<bool>, usize) {
 }
 
 /// Which faces repeat the vertex set of an earlier face, and how many.
+///
+/// O(n) without hashing: faces are bucketed by their smallest vertex (a counting sort), and
+/// only faces within a bucket are compared.
 pub fn find_duplicates(mesh: &TriMesh) -> (Vec<bool>, usize) {
-    let mut seen: FxHashSet<[u32; 3]> = FxHashSet::default();
-    seen.reserve(mesh.faces.len());
-    let mut n = 0;
-    let flags = mesh
+    let nv = mesh.positions.len();
+    let keys: Vec<[u32; 3]> = mesh
         .faces
         .iter()
         .map(|f| {
             let mut k = *f;
             k.sort_unstable();
-            let dup = !seen.insert(k);
-            n += usize::from(dup);
-            dup
+            k
         })
         .collect();
-    (flags, n)
+    let mut start = vec![0u32; nv + 1];
+    for k in &keys {
+        start[k[0] as usize + 1] += 1;
+    }
+    for v in 0..nv {
+        start[v + 1] += start[v];
+    }
+    let mut fill = start.clone();
+    let mut bucket = vec![0u32; keys.len()];
+    for (f, k) in keys.iter().enumerate() {
+        let slot = &mut fill[k[0] as usize];
+        bucket[*slot as usize] = f as u32;
+        *slot += 1;
+    }
+    let mut dup = vec![false; keys.len()];
+    let mut n = 0;
+    for v in 0..nv {
+        let b = &bucket[start[v] as usize..start[v + 1] as usize];
+        // Faces are in increasing order within a bucket: the first of equal keys stays.
+        for (i, &f) in b.iter().enumerate() {
+            if b[..i].iter().any(|&g| keys[g as usize] == keys[f as usize]) {
+                dup[f as usize] = true;
+                n += 1;
+            }
+        }
+    }
+    (dup, n)
 }
 
 /// Drops degenerate faces; returns how many went.

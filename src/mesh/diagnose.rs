@@ -129,7 +129,7 @@ pub struct Diagnosis {
 pub fn diagnose(mesh: &TriMesh) -> Diagnosis {
     let topo = Topology::build(mesh);
     let plan = orient::plan(mesh, &topo, true);
-    let mut d = diagnose_with(mesh, &topo, &plan, false);
+    let mut d = diagnose_with(mesh, &topo, &plan, false, false);
     let dist = WeldTolerance::default().distance(mesh.diagonal());
     d.near_duplicate_vertices = Some(mesh.positions.len() - weld_map(&mesh.positions, dist).1);
     d
@@ -137,7 +137,14 @@ pub fn diagnose(mesh: &TriMesh) -> Diagnosis {
 
 /// Inspects `mesh` with a topology and orientation plan already computed. With `applied`, the
 /// winding facts are those after `orient::apply(mesh, plan)` (flips change no other fact).
-pub fn diagnose_with(mesh: &TriMesh, topo: &Topology, plan: &Plan, applied: bool) -> Diagnosis {
+/// `clean` tells that degenerate and duplicate faces were just dropped (their counts are 0).
+pub fn diagnose_with(
+    mesh: &TriMesh,
+    topo: &Topology,
+    plan: &Plan,
+    applied: bool,
+    clean: bool,
+) -> Diagnosis {
     let nv = mesh.positions.len();
     let mut used = vec![false; nv];
     let mut faces_ok = 0usize;
@@ -190,8 +197,11 @@ pub fn diagnose_with(mesh: &TriMesh, topo: &Topology, plan: &Plan, applied: bool
     };
     let edges = manifold_half / 2 + boundary + plan.non_manifold_edges;
     let non_manifold_vertices = count_non_manifold_vertices(mesh, topo);
-    let (_, degenerate) = find_degenerate(mesh);
-    let (_, duplicates) = find_duplicates(mesh);
+    let (degenerate, duplicates) = if clean {
+        (0, 0)
+    } else {
+        (find_degenerate(mesh).1, find_duplicates(mesh).1)
+    };
 
     let non_orientable = plan.components.iter().filter(|c| !c.orientable).count();
     let (winding_consistent, outward) = if applied {
@@ -269,46 +279,49 @@ pub fn diagnose_with(mesh: &TriMesh, topo: &Topology, plan: &Plan, applied: bool
 }
 
 /// Vertices whose incident faces, joined through manifold edges at the vertex, form more than
-/// one fan.
+/// one fan: a walk around the vertex across manifold edges, both ways from its first face, must
+/// meet every incident face. The walk leaves each face through the edge at the vertex it did not
+/// enter by, so it does not depend on the winding.
 fn count_non_manifold_vertices(mesh: &TriMesh, topo: &Topology) -> usize {
+    // The two half-edges of face f that touch v: leaving v, and entering v.
+    let at = |f: usize, v: u32| {
+        let i = mesh.faces[f].iter().position(|&x| x == v).unwrap_or(0);
+        (f * 3 + i, f * 3 + (i + 2) % 3)
+    };
     let mut count = 0;
-    let mut parent: Vec<usize> = Vec::new();
     for v in 0..mesh.positions.len() as u32 {
         let star = topo.vertex_faces(v);
         if star.len() < 2 {
             continue;
         }
-        parent.clear();
-        parent.extend(0..star.len());
-        fn find(p: &mut [usize], mut x: usize) -> usize {
-            while p[x] != x {
-                p[x] = p[p[x]];
-                x = p[x];
+        let f0 = star[0] as usize;
+        let (first, second) = at(f0, v);
+        let mut seen = 1;
+        let mut closed = false;
+        for start in [first, second] {
+            if closed || seen > star.len() {
+                break;
             }
-            x
-        }
-        for (k, &f) in star.iter().enumerate() {
-            let face = &mesh.faces[f as usize];
-            for i in 0..3 {
-                // The two edges of f touching v.
-                if face[i] != v && face[(i + 1) % 3] != v {
-                    continue;
-                }
-                let o = topo.opp[f as usize * 3 + i];
+            let mut h = start;
+            loop {
+                let o = topo.opp[h];
                 if o >= NON_MANIFOLD {
-                    continue;
+                    break;
                 }
-                let g = o / 3;
-                if let Ok(j) = star.binary_search(&g) {
-                    let (a, b) = (find(&mut parent, k), find(&mut parent, j));
-                    parent[a] = b;
+                let g = o as usize / 3;
+                if g == f0 {
+                    closed = true;
+                    break;
                 }
+                seen += 1;
+                if seen > star.len() {
+                    break;
+                }
+                let (s1, s2) = at(g, v);
+                h = if s1 == o as usize { s2 } else { s1 };
             }
         }
-        let fans = (0..star.len())
-            .filter(|&k| find(&mut parent, k) == k)
-            .count();
-        if fans > 1 {
+        if seen != star.len() {
             count += 1;
         }
     }

@@ -77,6 +77,70 @@ pub struct PolygonStats {
     pub overlapping_polygons: usize,
 }
 
+/// Face records as read: every record's corner indices, stored flat.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Polygons {
+    corners: Vec<u32>,
+    starts: Vec<usize>,
+}
+
+impl Polygons {
+    /// Room for about `n` records of three corners.
+    pub fn with_capacity(n: usize) -> Polygons {
+        Polygons {
+            corners: Vec::with_capacity(3 * n),
+            starts: Vec::with_capacity(n),
+        }
+    }
+
+    /// Appends a record.
+    pub fn push(&mut self, corners: impl IntoIterator<Item = u32>) {
+        self.starts.push(self.corners.len());
+        self.corners.extend(corners);
+    }
+
+    /// Number of records.
+    pub fn len(&self) -> usize {
+        self.starts.len()
+    }
+
+    /// Whether there are none.
+    pub fn is_empty(&self) -> bool {
+        self.starts.is_empty()
+    }
+
+    /// Corners in all records.
+    pub fn corner_count(&self) -> usize {
+        self.corners.len()
+    }
+
+    /// The records, in order.
+    pub fn iter(&self) -> impl Iterator<Item = &[u32]> {
+        (0..self.starts.len()).map(|k| {
+            let end = self
+                .starts
+                .get(k + 1)
+                .copied()
+                .unwrap_or(self.corners.len());
+            &self.corners[self.starts[k]..end]
+        })
+    }
+
+    /// Triangulates every record (see [`triangulate`]).
+    pub fn triangulate(
+        &self,
+        positions: &[Point3],
+        split: QuadSplit,
+    ) -> (Vec<[u32; 3]>, PolygonStats) {
+        let mut faces = Vec::with_capacity(self.corners.len().saturating_sub(2 * self.len()));
+        let mut stats = PolygonStats::default();
+        for ring in self.iter() {
+            triangulate(positions, ring, split, &mut faces, &mut stats);
+        }
+        (faces, stats)
+    }
+}
+
 /// Triangulates one face record, appending triangles to `out`.
 ///
 /// ```

@@ -108,7 +108,13 @@ pub fn prepare(mesh: &mut TriMesh, opts: &PrepareOptions) -> PrepareReport {
     let unreferenced_vertices = mesh.drop_unreferenced_vertices();
     let topo = Topology::build(mesh);
     let plan = orient::plan(mesh, &topo, true);
-    let after = diagnose_with(mesh, &topo, &plan, opts.orient);
+    let after = diagnose_with(
+        mesh,
+        &topo,
+        &plan,
+        opts.orient,
+        opts.drop_degenerate && opts.drop_duplicates,
+    );
     let orient_report = if opts.orient {
         orient::apply(mesh, &plan);
         Some(plan.report())

@@ -1,8 +1,9 @@
 //! Edge adjacency of a triangle mesh, built in O(n) without hashing.
 //!
-//! Half-edge `3f + i` runs from `faces[f][i]` to `faces[f][(i + 1) % 3]`. For each half-edge the
-//! faces around its start vertex (a compressed vertex-to-face table, built by counting sort) are
-//! scanned for the other faces holding the same edge. The result, `opp[h]`, is the one other
+//! Half-edge `3f + i` runs from `faces[f][i]` to `faces[f][(i + 1) % 3]`. The half-edges leaving
+//! each vertex are listed with their end vertex (a compressed table built by counting sort); the
+//! other half-edges on edge `{a, b}` are those leaving `b` towards `a` and those leaving `a`
+//! towards `b`, found by scanning two short contiguous lists. The result, `opp[h]`, is the one other
 //! half-edge on that edge when exactly two faces share it (a manifold edge), [`BOUNDARY`] when
 //! the face is alone on it, and [`NON_MANIFOLD`] when three or more faces share it. Faces with a
 //! repeated corner are left out (all their half-edges are [`BOUNDARY`]): clean them first.
@@ -54,57 +55,56 @@ impl Topology {
         for v in 0..nv {
             count[v + 1] += count[v];
         }
-        let vf_start = count.clone();
-        let mut fill = count;
+        // Each vertex has as many outgoing half-edges as incident faces: one table serves both.
+        let vf_start = count;
+        let mut fill = vf_start.clone();
         let mut vf_faces = vec![0u32; vf_start[nv] as usize];
+        // Outgoing half-edges of each vertex: (end vertex, half-edge).
+        let mut out = vec![(0u32, 0u32); vf_start[nv] as usize];
         for (fi, f) in faces.iter().enumerate() {
             if !is_index_degenerate(f) {
-                for &v in f {
-                    let slot = &mut fill[v as usize];
+                for i in 0..3 {
+                    let slot = &mut fill[f[i] as usize];
                     vf_faces[*slot as usize] = fi as u32;
+                    out[*slot as usize] = (f[(i + 1) % 3], (fi * 3 + i) as u32);
                     *slot += 1;
                 }
             }
         }
         let mut opp = vec![BOUNDARY; faces.len() * 3];
+        let outgoing =
+            |v: u32| &out[vf_start[v as usize] as usize..vf_start[v as usize + 1] as usize];
         opp.par_chunks_mut(CHUNK_FACES * 3)
             .enumerate()
-            .for_each(|(chunk, out)| {
-                let f0 = chunk * CHUNK_FACES;
-                for (k, slot) in out.iter_mut().enumerate() {
-                    let f = f0 + k / 3;
-                    let i = k % 3;
-                    let face = &faces[f];
+            .for_each(|(chunk, slots)| {
+                let h0 = chunk * CHUNK_FACES * 3;
+                for (k, slot) in slots.iter_mut().enumerate() {
+                    let h = h0 + k;
+                    let face = &faces[h / 3];
                     if is_index_degenerate(face) {
                         continue;
                     }
-                    let a = face[i];
-                    let b = face[(i + 1) % 3];
-                    let star =
-                        &vf_faces[vf_start[a as usize] as usize..vf_start[a as usize + 1] as usize];
+                    let a = face[h % 3];
+                    let b = face[(h % 3 + 1) % 3];
                     let mut found = BOUNDARY;
-                    for &g in star {
-                        if g as usize == f {
-                            continue;
-                        }
-                        let gf = &faces[g as usize];
-                        // The slot j of g whose edge is {a, b}, either direction.
-                        let j = (0..3).find(|&j| {
-                            let (x, y) = (gf[j], gf[(j + 1) % 3]);
-                            (x == b && y == a) || (x == a && y == b)
-                        });
-                        if let Some(j) = j {
-                            found = if found == BOUNDARY {
-                                g * 3 + j as u32
-                            } else {
-                                NON_MANIFOLD
-                            };
-                            if found == NON_MANIFOLD {
-                                break;
-                            }
+                    let mut n = 0;
+                    for &(end, g) in outgoing(b) {
+                        if end == a {
+                            found = g;
+                            n += 1;
                         }
                     }
-                    *slot = found;
+                    for &(end, g) in outgoing(a) {
+                        if end == b && g as usize != h {
+                            found = g;
+                            n += 1;
+                        }
+                    }
+                    *slot = match n {
+                        0 => BOUNDARY,
+                        1 => found,
+                        _ => NON_MANIFOLD,
+                    };
                 }
             });
         Topology {

@@ -14,7 +14,6 @@
 
 use super::TriMesh;
 use crate::math::{tol, Point3};
-use rustc_hash::FxHashMap;
 use serde::Serialize;
 use std::fmt;
 use std::str::FromStr;
@@ -107,11 +106,14 @@ pub struct WeldReport {
 /// ```
 pub struct ExactIndexer {
     positions: Vec<Point3>,
-    table: Vec<u32>,
+    /// Open addressing: `fingerprint << 32 | index`, or [`EMPTY_SLOT`]. The fingerprint (high
+    /// hash bits) settles most mismatches without touching `positions`.
+    table: Vec<u64>,
     mask: usize,
 }
 
 const EMPTY: u32 = u32::MAX;
+const EMPTY_SLOT: u64 = u64::MAX;
 
 #[inline]
 fn key_bits(p: &Point3) -> [u64; 3] {
@@ -133,7 +135,7 @@ impl ExactIndexer {
         let size = (n.max(8) * 2).next_power_of_two();
         ExactIndexer {
             positions: Vec::with_capacity(n),
-            table: vec![EMPTY; size],
+            table: vec![EMPTY_SLOT; size],
             mask: size - 1,
         }
     }
@@ -142,20 +144,22 @@ impl ExactIndexer {
     #[inline]
     pub fn index(&mut self, p: Point3) -> u32 {
         let k = key_bits(&p);
-        let mut slot = hash_bits(&k) as usize & self.mask;
+        let h = hash_bits(&k);
+        let fp = h >> 32;
+        let mut slot = h as usize & self.mask;
         loop {
             let e = self.table[slot];
-            if e == EMPTY {
+            if e == EMPTY_SLOT {
                 break;
             }
-            if key_bits(&self.positions[e as usize]) == k {
-                return e;
+            if e >> 32 == fp && key_bits(&self.positions[e as u32 as usize]) == k {
+                return e as u32;
             }
             slot = (slot + 1) & self.mask;
         }
         let id = self.positions.len() as u32;
         self.positions.push(p);
-        self.table[slot] = id;
+        self.table[slot] = fp << 32 | u64::from(id);
         if self.positions.len() * 2 > self.table.len() {
             self.grow();
         }
@@ -179,14 +183,85 @@ impl ExactIndexer {
 
     fn grow(&mut self) {
         let size = self.table.len() * 2;
-        self.table = vec![EMPTY; size];
+        self.table = vec![EMPTY_SLOT; size];
         self.mask = size - 1;
         for (id, p) in self.positions.iter().enumerate() {
-            let mut slot = hash_bits(&key_bits(p)) as usize & self.mask;
-            while self.table[slot] != EMPTY {
+            let h = hash_bits(&key_bits(p));
+            let mut slot = h as usize & self.mask;
+            while self.table[slot] != EMPTY_SLOT {
                 slot = (slot + 1) & self.mask;
             }
-            self.table[slot] = id as u32;
+            self.table[slot] = (h >> 32) << 32 | id as u64;
+        }
+    }
+}
+
+/// Cells of the weld's spatial hash: cell coordinates to the first representative in the cell.
+struct CellTable {
+    slots: Vec<u32>,
+    keys: Vec<[i64; 3]>,
+    heads: Vec<u32>,
+    mask: usize,
+}
+
+impl CellTable {
+    fn with_capacity(n: usize) -> CellTable {
+        let size = (n.max(8) * 2).next_power_of_two();
+        CellTable {
+            slots: vec![EMPTY; size],
+            keys: Vec::with_capacity(n),
+            heads: Vec::with_capacity(n),
+            mask: size - 1,
+        }
+    }
+
+    #[inline]
+    fn slot_of(&self, k: &[i64; 3]) -> (usize, bool) {
+        let mut slot = hash_bits(&k.map(|c| c as u64)) as usize & self.mask;
+        loop {
+            let e = self.slots[slot];
+            if e == EMPTY {
+                return (slot, false);
+            }
+            if self.keys[e as usize] == *k {
+                return (slot, true);
+            }
+            slot = (slot + 1) & self.mask;
+        }
+    }
+
+    /// The first representative in cell `k`, or `EMPTY`.
+    #[inline]
+    fn head(&self, k: &[i64; 3]) -> u32 {
+        match self.slot_of(k) {
+            (slot, true) => self.heads[self.slots[slot] as usize],
+            _ => EMPTY,
+        }
+    }
+
+    /// Makes `rep` the first representative of cell `k`; returns the previous first.
+    fn push(&mut self, k: [i64; 3], rep: u32) -> u32 {
+        let (slot, found) = self.slot_of(&k);
+        if found {
+            let e = self.slots[slot] as usize;
+            std::mem::replace(&mut self.heads[e], rep)
+        } else {
+            self.slots[slot] = self.keys.len() as u32;
+            self.keys.push(k);
+            self.heads.push(rep);
+            if self.keys.len() * 2 > self.slots.len() {
+                let size = self.slots.len() * 2;
+                self.slots = vec![EMPTY; size];
+                self.mask = size - 1;
+                for (i, key) in self.keys.iter().enumerate() {
+                    let mut s = hash_bits(&key.map(|c| c as u64)) as usize & self.mask;
+                    while self.slots[s] != EMPTY {
+                        s = (s + 1) & self.mask;
+                    }
+                    self.slots[s] = i as u32;
+                }
+            }
+            EMPTY
         }
     }
 }
@@ -206,8 +281,7 @@ pub fn weld_map(positions: &[Point3], distance: f64) -> (Vec<u32>, usize) {
     let inv = 1.0 / cell;
     let d2 = distance * distance;
     let cell_of = |x: f64| (x * inv).floor() as i64;
-    let mut heads: FxHashMap<[i64; 3], u32> = FxHashMap::default();
-    heads.reserve(positions.len());
+    let mut cells = CellTable::with_capacity(positions.len());
     // Representatives: their position, the next one in the same cell, and their new index.
     let mut rep_next: Vec<u32> = Vec::new();
     let mut rep_pos: Vec<Point3> = Vec::new();
@@ -226,7 +300,7 @@ pub fn weld_map(positions: &[Point3], distance: f64) -> (Vec<u32>, usize) {
         'search: for cx in lo[0]..=hi[0] {
             for cy in lo[1]..=hi[1] {
                 for cz in lo[2]..=hi[2] {
-                    let mut r = heads.get(&[cx, cy, cz]).copied().unwrap_or(EMPTY);
+                    let mut r = cells.head(&[cx, cy, cz]);
                     while r != EMPTY {
                         if (rep_pos[r as usize] - p).norm_squared() <= d2 {
                             found = r;
@@ -240,9 +314,7 @@ pub fn weld_map(positions: &[Point3], distance: f64) -> (Vec<u32>, usize) {
         if found == EMPTY {
             let id = rep_pos.len() as u32;
             let c = [cell_of(p.x), cell_of(p.y), cell_of(p.z)];
-            let head = heads.entry(c).or_insert(EMPTY);
-            rep_next.push(*head);
-            *head = id;
+            rep_next.push(cells.push(c, id));
             rep_pos.push(*p);
             found = id;
         }
