@@ -303,3 +303,42 @@ fn inspect_reports_json_keys() {
     // Eight of twelve faces point outward: the majority winding gives the true volume.
     assert!((v - 240_000.0).abs() < 1e-6, "{v}");
 }
+
+#[test]
+fn results_do_not_depend_on_the_thread_count() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut m = generate::icosphere(5);
+    flip_some(&mut m, 3);
+    // An open part too, so the winding-number rule runs.
+    let keep: Vec<bool> = (0..m.faces.len())
+        .map(|f| m.corners(f)[0].z < 0.7)
+        .collect();
+    m.retain_faces(&keep);
+    let src = dir.path().join("s.stl");
+    write_mesh(&src, &m, &WriteOptions::default(), &[]).unwrap();
+    let mut outputs = Vec::new();
+    for jobs in ["1", "2", "3"] {
+        let out = dir.path().join(format!("o{jobs}.ply"));
+        let rep = dir.path().join(format!("r{jobs}.json"));
+        let o = run(&[
+            "--jobs",
+            jobs,
+            "convert",
+            src.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--report",
+            rep.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", text(&o).1);
+        let mut r: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(&rep).unwrap()).unwrap();
+        r["wall_seconds"] = 0.into();
+        r["output"] = "".into();
+        outputs.push((std::fs::read(&out).unwrap(), r));
+    }
+    assert!(
+        outputs.windows(2).all(|w| w[0] == w[1]),
+        "output or report differs with --jobs"
+    );
+}
