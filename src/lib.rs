@@ -4,6 +4,7 @@
 //! meshes ([`io`], [`mesh`]); fit mannequins; drape cloth. `src/main.rs` only calls [`cli::main`].
 
 pub mod cli;
+pub mod fit;
 pub mod io;
 pub mod math;
 pub mod mesh;

@@ -16,6 +16,19 @@ use std::time::Instant;
 pub enum BenchCommand {
     /// Convert a flipped icosphere binary STL to binary PLY (weld + orient), optionally against trimesh.
     Convert(ConvertBench),
+    /// Fit an analytic surface: error and time against nodes for each Lanczos order; fit speed.
+    Fit(FitBench),
+}
+
+/// Arguments of `drapekit bench fit`.
+#[derive(Debug, clap::Args)]
+pub struct FitBench {
+    /// Timed repetitions of each measurement (the median is reported).
+    #[arg(long, default_value_t = 9, value_parser = clap::value_parser!(u32).range(1..))]
+    pub runs: u32,
+    /// Print the results as JSON.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Arguments of `drapekit bench convert`.
@@ -46,6 +59,7 @@ pub struct ConvertBench {
 pub fn run(cmd: BenchCommand) -> anyhow::Result<()> {
     match cmd {
         BenchCommand::Convert(a) => bench_convert(a),
+        BenchCommand::Fit(a) => super::bench_fit::run(a),
     }
 }
 

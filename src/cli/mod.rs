@@ -3,7 +3,9 @@
 //! usage errors, from clap).
 
 mod bench;
+mod bench_fit;
 mod convert;
+mod fit;
 mod inspect;
 
 use crate::io::Format;
@@ -33,6 +35,8 @@ pub enum Command {
     Convert(convert::ConvertArgs),
     /// Inspect a mesh as it is: counts, boundaries, manifoldness, winding, volumes, shell state.
     Inspect(inspect::InspectArgs),
+    /// Fit a mannequin (dress form) from sections, measurements or a scanned body.
+    Fit(fit::FitArgs),
     /// Benchmarks (speed against a baseline in the same run).
     #[command(subcommand)]
     Bench(bench::BenchCommand),
@@ -79,6 +83,7 @@ pub fn main() -> ExitCode {
     let result = match cli.command {
         Command::Convert(a) => convert::run(a),
         Command::Inspect(a) => inspect::run(a),
+        Command::Fit(a) => fit::run(a),
         Command::Bench(b) => bench::run(b),
     };
     match result {

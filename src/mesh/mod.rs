@@ -2,11 +2,13 @@
 //! the diagnosis behind `drapekit inspect`.
 
 pub mod clean;
+pub mod closest;
 pub mod diagnose;
 pub mod generate;
 pub mod orient;
 pub mod polygon;
 pub mod prepare;
+pub mod slice;
 pub mod topology;
 pub mod transform;
 pub mod trimesh;

@@ -266,7 +266,33 @@ fn split_quad(
     }
 }
 
-/// Ear clipping of a cleaned ring of five or more corners.
+/// An ear candidate in the priority queue: best shape first, then lowest corner.
+#[derive(PartialEq)]
+struct Ear {
+    quality: f64,
+    corner: usize,
+    version: u32,
+}
+
+impl Eq for Ear {}
+
+impl PartialOrd for Ear {
+    fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl Ord for Ear {
+    fn cmp(&self, other: &Self) -> std::cmp::Ordering {
+        self.quality
+            .total_cmp(&other.quality)
+            .then(other.corner.cmp(&self.corner))
+    }
+}
+
+/// Ear clipping of a cleaned ring of five or more corners. The best-shaped ear (area over the
+/// squared longest edge) goes first, so near-collinear runs are not cut into slivers; after each
+/// clip only the two neighbours are re-examined (O(n^2) in all).
 fn ear_clip(positions: &[Point3], ring: &[u32], out: &mut Vec<[u32; 3]>, stats: &mut PolygonStats) {
     let n = ring.len();
     let normal = newell_normal(ring.iter().map(|&i| positions[i as usize]));
@@ -290,55 +316,143 @@ fn ear_clip(positions: &[Point3], ring: &[u32], out: &mut Vec<[u32; 3]>, stats: 
         .collect();
     let mut next: Vec<usize> = (0..n).map(|i| (i + 1) % n).collect();
     let mut prev: Vec<usize> = (0..n).map(|i| (i + n - 1) % n).collect();
+    let mut alive = vec![true; n];
+    let mut version = vec![0u32; n];
     let mut remaining = n;
-    let mut i = 0;
-    let mut misses = 0;
-    // Strictness: 0 = proper ears only, 1 = allow flat ears, 2 = forced clip.
-    let mut level = 0;
-    let mut overlapped = false;
-    while remaining > 3 {
+    let quality = |next: &[usize], prev: &[usize], remaining: usize, i: usize| -> Option<f64> {
         let (a, c) = (prev[i], next[i]);
-        let ok = match level {
-            0 => is_ear(&pts, &next, a, i, c, remaining, false),
-            1 => is_ear(&pts, &next, a, i, c, remaining, true),
-            _ => true,
-        };
-        if ok {
-            out.push([ring[a], ring[i], ring[c]]);
-            next[a] = c;
-            prev[c] = a;
-            remaining -= 1;
-            i = c;
-            misses = 0;
-            level = 0;
-            continue;
+        if !is_ear(&pts, next, a, i, c, remaining, false) {
+            return None;
         }
-        i = next[i];
-        misses += 1;
-        if misses > remaining {
-            misses = 0;
-            level += 1;
-            if level == 2 {
-                overlapped = true;
-                // Clip the most convex corner left.
-                let mut best = i;
-                let mut best_area = f64::NEG_INFINITY;
-                let mut j = i;
-                for _ in 0..remaining {
-                    let area = orient2d(&pts[prev[j]], &pts[j], &pts[next[j]]);
-                    if area > best_area {
-                        best_area = area;
-                        best = j;
-                    }
-                    j = next[j];
+        let area = orient2d(&pts[a], &pts[i], &pts[c]);
+        let longest = (pts[i] - pts[a])
+            .norm_squared()
+            .max((pts[c] - pts[i]).norm_squared())
+            .max((pts[a] - pts[c]).norm_squared());
+        Some(area / longest)
+    };
+    let mut heap = std::collections::BinaryHeap::new();
+    for i in 0..n {
+        if let Some(q) = quality(&next, &prev, remaining, i) {
+            heap.push(Ear {
+                quality: q,
+                corner: i,
+                version: 0,
+            });
+        }
+    }
+    let mut overlapped = false;
+    let mut last = 0;
+    let mut tris: Vec<[usize; 3]> = Vec::with_capacity(n - 2);
+    while remaining > 3 {
+        let corner = loop {
+            match heap.pop() {
+                Some(e) if alive[e.corner] && version[e.corner] == e.version => {
+                    break Some(e.corner)
                 }
-                i = best;
+                Some(_) => continue,
+                None => break None,
+            }
+        };
+        let i = match corner {
+            Some(i) => i,
+            None => {
+                // No proper ear: a flat one, else the most convex corner (a self-intersecting ring).
+                let live: Vec<usize> = (0..n).filter(|&j| alive[j]).collect();
+                match live
+                    .iter()
+                    .copied()
+                    .find(|&j| is_ear(&pts, &next, prev[j], j, next[j], remaining, true))
+                {
+                    Some(j) => j,
+                    None => {
+                        overlapped = true;
+                        live.iter()
+                            .copied()
+                            .max_by(|&a, &b| {
+                                orient2d(&pts[prev[a]], &pts[a], &pts[next[a]])
+                                    .total_cmp(&orient2d(&pts[prev[b]], &pts[b], &pts[next[b]]))
+                            })
+                            .unwrap()
+                    }
+                }
+            }
+        };
+        let (a, c) = (prev[i], next[i]);
+        tris.push([a, i, c]);
+        next[a] = c;
+        prev[c] = a;
+        alive[i] = false;
+        remaining -= 1;
+        last = c;
+        for j in [a, c] {
+            version[j] += 1;
+            if let Some(q) = quality(&next, &prev, remaining, j) {
+                heap.push(Ear {
+                    quality: q,
+                    corner: j,
+                    version: version[j],
+                });
             }
         }
     }
-    out.push([ring[prev[i]], ring[i], ring[next[i]]]);
+    tris.push([prev[last], last, next[last]]);
+    flip_flat_triangles(&pts, &mut tris);
+    out.extend(tris.iter().map(|t| t.map(|i| ring[i])));
     if overlapped {
         stats.overlapping_polygons += 1;
+    }
+}
+
+/// Triangles flatter than this (twice the area over the squared longest edge) are flipped away.
+const FLAT: f64 = 1e-9;
+
+/// Removes flat triangles (three nearly collinear corners, left where the ring has straight
+/// runs) by flipping each one's longest edge with the triangle across it, when both new
+/// triangles keep the winding.
+fn flip_flat_triangles(pts: &[Point2], tris: &mut [[usize; 3]]) {
+    let flatness = |t: &[usize; 3]| {
+        let (a, b, c) = (pts[t[0]], pts[t[1]], pts[t[2]]);
+        let longest = (b - a)
+            .norm_squared()
+            .max((c - b).norm_squared())
+            .max((a - c).norm_squared());
+        if longest == 0.0 {
+            0.0
+        } else {
+            orient2d(&a, &b, &c) / longest
+        }
+    };
+    for _ in 0..tris.len() {
+        let mut changed = false;
+        for t in 0..tris.len() {
+            if flatness(&tris[t]) > FLAT {
+                continue;
+            }
+            // Rotate so the longest edge is (p, q), r opposite.
+            let tri = tris[t];
+            let len = |k: usize| (pts[tri[(k + 1) % 3]] - pts[tri[k]]).norm_squared();
+            let k = (0..3).max_by(|&x, &y| len(x).total_cmp(&len(y))).unwrap();
+            let (p, q, r) = (tri[k], tri[(k + 1) % 3], tri[(k + 2) % 3]);
+            let Some(u) = (0..tris.len())
+                .find(|&u| u != t && (0..3).any(|j| tris[u][j] == q && tris[u][(j + 1) % 3] == p))
+            else {
+                continue;
+            };
+            let j = (0..3)
+                .find(|&j| tris[u][j] == q && tris[u][(j + 1) % 3] == p)
+                .unwrap();
+            let s = tris[u][(j + 2) % 3];
+            let (t1, t2) = ([r, p, s], [s, q, r]);
+            if flatness(&t1) > FLAT && flatness(&t2) > FLAT {
+                tris[t] = t1;
+                tris[u] = t2;
+                changed = true;
+            }
+        }
+        if !changed {
+            break;
+        }
     }
 }
 
@@ -504,6 +618,21 @@ mod tests {
         for tri in &t {
             let [a, b, c] = tri.map(|i| p[i as usize]);
             assert!((b - a).cross(&(c - a)).z < 0.0);
+        }
+    }
+
+    #[test]
+    fn collinear_runs_leave_no_flat_triangle() {
+        // A rectangle with many corners along its long sides (a subdivided CAD edge).
+        let mut xy: Vec<(f64, f64)> = (0..=20).map(|i| (i as f64 * 0.5, 0.0)).collect();
+        xy.extend((0..=20).rev().map(|i| (i as f64 * 0.5, 1.0)));
+        let p = pts2(&xy);
+        let ring: Vec<u32> = (0..p.len() as u32).collect();
+        let (t, st) = run(&p, &ring, QuadSplit::Paper);
+        assert_eq!((t.len(), st.overlapping_polygons), (p.len() - 2, 0));
+        for tri in &t {
+            let [a, b, c] = tri.map(|i| p[i as usize]);
+            assert!((b - a).cross(&(c - a)).z > 0.1, "flat or flipped: {tri:?}");
         }
     }
 

@@ -1,0 +1,222 @@
+//! `drapekit bench fit`: the speed/accuracy trade of the fitter, measured.
+//!
+//! The analytic surface is closed around and not periodic along the height:
+//! `x = r(v) cos t (1 + 0.1 cos 2t)`, `y = 0.8 r(v) sin t`, `z = 0.5 + 1.7 v + 0.2 v^2`,
+//! `r(v) = 1 + 0.3 v + 0.2 sin 2v + 0.1 e^v`, `t = 2 pi u`. Around it has degree 3, so 32 nodes
+//! reproduce it exactly and every error measured comes from the height direction. For each
+//! number of node intervals `K - 1` the table gives the largest error over 401 heights at the
+//! nodes around, for a plain periodic interpolation (no correction: the Gibbs error) and for
+//! Lanczos orders 0, 1, 2, with the fit time; then the measured convergence order.
+
+use super::bench::FitBench;
+use crate::fit::fitter::{fit_sections, FitOptions};
+use crate::fit::section::Section;
+use crate::fit::surface;
+use crate::fit::trig;
+use crate::math::{Point2, Point3};
+use realfft::RealFftPlanner;
+use serde::Serialize;
+use std::time::Instant;
+
+fn r(v: f64) -> f64 {
+    1.0 + 0.3 * v + 0.2 * (2.0 * v).sin() + 0.1 * v.exp()
+}
+
+/// The analytic surface at (u, v).
+pub fn analytic(u: f64, v: f64) -> Point3 {
+    let t = std::f64::consts::TAU * u;
+    Point3::new(
+        r(v) * t.cos() * (1.0 + 0.1 * (2.0 * t).cos()),
+        0.8 * r(v) * t.sin(),
+        0.5 + 1.7 * v + 0.2 * v * v,
+    )
+}
+
+const AROUND: usize = 32;
+const HEIGHTS: usize = 401;
+
+fn grid(k: usize) -> Vec<Point3> {
+    (0..k)
+        .flat_map(|i| {
+            (0..AROUND).map(move |l| analytic(l as f64 / AROUND as f64, i as f64 / (k - 1) as f64))
+        })
+        .collect()
+}
+
+/// Largest error of the Lanczos fit of order m with k nodes along.
+fn lanczos_error(k: usize, m: usize) -> f64 {
+    let s = surface::fit(&grid(k), k, AROUND, m);
+    let mut e: f64 = 0.0;
+    for i in 0..HEIGHTS {
+        let v = i as f64 / (HEIGHTS - 1) as f64;
+        for (l, p) in s.eval_ring(v, AROUND).iter().enumerate() {
+            e = e.max((p - analytic(l as f64 / AROUND as f64, v)).norm());
+        }
+    }
+    e
+}
+
+/// Largest error of a plain periodic interpolation along (nodes 0..k-1, period 1: no correction).
+fn plain_error(k: usize) -> f64 {
+    let mut planner = RealFftPlanner::new();
+    let n = k - 1;
+    let mut e: f64 = 0.0;
+    for l in 0..AROUND {
+        let u = l as f64 / AROUND as f64;
+        let coef: Vec<_> = (0..3)
+            .map(|c| {
+                let s: Vec<f64> = (0..n)
+                    .map(|i| analytic(u, i as f64 / n as f64)[c])
+                    .collect();
+                trig::coefficients(&mut planner, &s)
+            })
+            .collect();
+        for i in 0..HEIGHTS {
+            let v = i as f64 / (HEIGHTS - 1) as f64;
+            let p = Point3::new(
+                trig::eval(&coef[0], n, v),
+                trig::eval(&coef[1], n, v),
+                trig::eval(&coef[2], n, v),
+            );
+            e = e.max((p - analytic(u, v)).norm());
+        }
+    }
+    e
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn timed<T>(runs: u32, mut f: impl FnMut() -> T) -> f64 {
+    median(
+        (0..runs)
+            .map(|_| {
+                let t = Instant::now();
+                std::hint::black_box(f());
+                t.elapsed().as_secs_f64()
+            })
+            .collect(),
+    )
+}
+
+#[derive(Debug, Serialize)]
+struct Row {
+    intervals: usize,
+    error_none: f64,
+    error: [f64; 3],
+    fit_ms: [f64; 3],
+}
+
+#[derive(Debug, Serialize)]
+struct Report {
+    rows: Vec<Row>,
+    order_none: f64,
+    order: [f64; 3],
+    speed_fit_tessellate_ms: f64,
+    speed_with_estimates_ms: f64,
+    runs: u32,
+}
+
+/// Runs the benchmark.
+pub fn run(a: FitBench) -> anyhow::Result<()> {
+    let intervals = [8usize, 16, 32, 64, 128, 256];
+    let mut rows = Vec::new();
+    if !a.json {
+        println!("bench fit: analytic surface, {AROUND} nodes around (exact), largest error over {HEIGHTS} heights");
+        println!("  K-1   no correction      m=0          m=1          m=2       fit ms (m=0/1/2)");
+    }
+    for &n in &intervals {
+        let k = n + 1;
+        let error = [0, 1, 2].map(|m| lanczos_error(k, m));
+        let g = grid(k);
+        let fit_ms = [0, 1, 2].map(|m| 1e3 * timed(a.runs, || surface::fit(&g, k, AROUND, m)));
+        let row = Row {
+            intervals: n,
+            error_none: plain_error(k),
+            error,
+            fit_ms,
+        };
+        if !a.json {
+            println!(
+                "  {:>4}   {:>10.3e}   {:>10.3e}   {:>10.3e}   {:>10.3e}    {:.2}/{:.2}/{:.2}",
+                n,
+                row.error_none,
+                row.error[0],
+                row.error[1],
+                row.error[2],
+                fit_ms[0],
+                fit_ms[1],
+                fit_ms[2]
+            );
+        }
+        rows.push(row);
+    }
+    // Order from the last three rows where the error is still above round-off.
+    let order_of = |errs: Vec<f64>| -> f64 {
+        let pts: Vec<(f64, f64)> = intervals
+            .iter()
+            .zip(errs)
+            .filter(|(_, e)| *e > 1e-12)
+            .map(|(n, e)| ((*n as f64).ln(), e.ln()))
+            .collect();
+        let tail = &pts[pts.len().saturating_sub(3)..];
+        if tail.len() < 2 {
+            return f64::NAN;
+        }
+        -(tail[tail.len() - 1].1 - tail[0].1) / (tail[tail.len() - 1].0 - tail[0].0)
+    };
+    let order = [0, 1, 2].map(|m| order_of(rows.iter().map(|r| r.error[m]).collect()));
+    let order_none = order_of(rows.iter().map(|r| r.error_none).collect());
+    if !a.json {
+        println!(
+            "  measured order: none {:.2}, m=0 {:.2}, m=1 {:.2}, m=2 {:.2} (theory: N^-(2m+1) or better: 1, 3, 5)",
+            order_none, order[0], order[1], order[2]
+        );
+    }
+    // Speed: 60 sections of 256 points, tessellated 256 x 256.
+    let sections: Vec<Section> = (0..60)
+        .map(|i| {
+            let v = i as f64 / 59.0;
+            let points = (0..256)
+                .map(|l| analytic(l as f64 / 256.0, v))
+                .map(|p| Point2::new(p.x, p.y))
+                .collect();
+            Section {
+                height: analytic(0.0, v).z,
+                points,
+            }
+        })
+        .collect();
+    let opts = FitOptions {
+        nodes_around: 256,
+        along: 256,
+        around: 256,
+        ..FitOptions::default()
+    };
+    let core = 1e3
+        * timed(a.runs, || {
+            let (s, _) = crate::fit::section::normalize(sections.clone()).unwrap();
+            let g = crate::fit::fitter::node_grid(&s, 256);
+            surface::fit(&g, 60, 256, 1).tessellate(256, 256, true)
+        });
+    let full = 1e3
+        * timed(a.runs, || {
+            fit_sections(sections.clone(), &[], &opts).unwrap()
+        });
+    if !a.json {
+        println!("  60 sections x 256 points, fit + tessellate 256 x 256: median {core:.1} ms (goal <= 50 ms); with error estimates and diagnosis: {full:.1} ms");
+    } else {
+        let rep = Report {
+            rows,
+            order_none,
+            order,
+            speed_fit_tessellate_ms: core,
+            speed_with_estimates_ms: full,
+            runs: a.runs,
+        };
+        println!("{}", serde_json::to_string_pretty(&rep)?);
+    }
+    Ok(())
+}

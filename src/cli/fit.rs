@@ -1,0 +1,342 @@
+//! `drapekit fit`: a mannequin from sections, measurements or a scan.
+
+use super::write_report;
+use crate::fit::fitter::{fit_sections, section_targets, FitOptions, FitReport, GirthTarget};
+use crate::fit::scan::{torso_sections, ScanOptions};
+use crate::fit::{input, measurements, FitError};
+use crate::io::{self, Format, ReadOptions, WriteOptions};
+use crate::mesh::prepare::{prepare, PrepareOptions};
+use crate::mesh::transform::{change_up, scale, Units, Up};
+use anyhow::Context;
+use clap::{ArgGroup, Args};
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Arguments of `drapekit fit`.
+#[derive(Debug, Args)]
+#[command(group(ArgGroup::new("source").required(true).args(["sections", "measurements", "from_mesh"])))]
+pub struct FitArgs {
+    /// Horizontal sections: a .json file ({"units", "sections": [{"height", "points"}]}) or a .csv (height,x,y).
+    #[arg(long, value_name = "FILE")]
+    pub sections: Option<PathBuf>,
+    /// Body measurements: a .toml file (stature and at least two girths; see the README).
+    #[arg(long, value_name = "FILE")]
+    pub measurements: Option<PathBuf>,
+    /// A scanned body mesh (any format drapekit reads): the torso is sliced and fitted.
+    #[arg(long, value_name = "MESH")]
+    pub from_mesh: Option<PathBuf>,
+    /// Where to write the form (.obj, .ply, .stl, .txt).
+    #[arg(short, long, value_name = "OUT")]
+    pub output: PathBuf,
+    /// Output format instead of the extension's: triples, obj, stl or ply.
+    #[arg(long, value_name = "FORMAT", value_parser = super::parse_format)]
+    pub format: Option<Format>,
+    /// Write ASCII STL or PLY.
+    #[arg(long)]
+    pub ascii: bool,
+    /// Units of a CSV sections file or of the mesh (JSON and TOML say their own) [default: m].
+    #[arg(long, value_name = "U", value_parser = parse_units)]
+    pub units: Option<Units>,
+    /// Write the form in these units [default: the input's].
+    #[arg(long, value_name = "U", value_parser = parse_units)]
+    pub to_units: Option<Units>,
+    /// Up axis of the mesh: y or z.
+    #[arg(long, value_name = "AXIS", default_value = "z", value_parser = parse_up)]
+    pub up: Up,
+    /// Up axis of the written form [default: z; for a mesh, the mesh's].
+    #[arg(long, value_name = "AXIS", value_parser = parse_up)]
+    pub to_up: Option<Up>,
+    /// Sections along the height: slices of the scan [60], sections of the measurement model [41].
+    #[arg(long, value_name = "K")]
+    pub levels: Option<usize>,
+    /// Scan: lowest slice height, in the mesh's units and up coordinate [0.48 of the body's height].
+    #[arg(long, value_name = "H1")]
+    pub from: Option<f64>,
+    /// Scan: highest slice height [0.74 of the body's height].
+    #[arg(long, value_name = "H2")]
+    pub to: Option<f64>,
+    /// Nodes around each section (points it is resampled to).
+    #[arg(long, value_name = "N", default_value_t = 128)]
+    pub nodes: usize,
+    /// Lanczos order along the height: 0, 1 or 2 (lowered, with a warning, when sections are too few).
+    #[arg(long, value_name = "M", default_value_t = 1, value_parser = clap::value_parser!(u8).range(0..=2))]
+    pub lanczos: u8,
+    /// Use every S-th section as a node.
+    #[arg(long, value_name = "S", default_value_t = 1)]
+    pub stride: usize,
+    /// Choose the fewest nodes and lowest order meeting this error, e.g. 0.5mm (bare numbers are input units).
+    #[arg(long, value_name = "LENGTH", value_parser = parse_length, conflicts_with_all = ["nodes", "stride", "lanczos"])]
+    pub tolerance: Option<(f64, Option<Units>)>,
+    /// Points around each ring of the output.
+    #[arg(long, value_name = "N", default_value_t = 128)]
+    pub around: usize,
+    /// Rings of the output along the height.
+    #[arg(long, value_name = "M", default_value_t = 129)]
+    pub along: usize,
+    /// Leave the top and bottom open.
+    #[arg(long)]
+    pub open: bool,
+    /// Write the JSON report here.
+    #[arg(long, value_name = "R.json")]
+    pub report: Option<PathBuf>,
+    /// Print the JSON report instead of the summary.
+    #[arg(long)]
+    pub json: bool,
+}
+
+fn parse_units(s: &str) -> Result<Units, String> {
+    s.parse()
+}
+fn parse_up(s: &str) -> Result<Up, String> {
+    s.parse()
+}
+
+/// A length with an optional unit: `0.5mm`, `0.05 cm`, `5e-4`.
+pub fn parse_length(s: &str) -> Result<(f64, Option<Units>), String> {
+    let s = s.trim();
+    let split = s
+        .find(|c: char| c.is_ascii_alphabetic() && c != 'e' && c != 'E')
+        .unwrap_or(s.len());
+    let (num, unit) = s.split_at(split);
+    let v: f64 = num
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{s}' is not a length: give e.g. 0.5mm"))?;
+    if !(v.is_finite() && v > 0.0) {
+        return Err(format!("'{s}' must be a positive length"));
+    }
+    let unit = if unit.trim().is_empty() {
+        None
+    } else {
+        Some(unit.trim().parse::<Units>()?)
+    };
+    Ok((v, unit))
+}
+
+/// The JSON report of `fit`.
+#[derive(Debug, Serialize)]
+pub struct FitCliReport {
+    /// The input file.
+    pub input: String,
+    /// `sections`, `measurements` or `scan`.
+    pub source: &'static str,
+    /// The output file.
+    pub output: String,
+    /// Units of the input (and of every length in this report but the output's).
+    pub units: Units,
+    /// Units of the written form.
+    pub output_units: Units,
+    /// Up axis of the written form.
+    pub output_up: Up,
+    /// Scan: the slicing band `[from, to]`.
+    pub band: Option<[f64; 2]>,
+    /// The fit.
+    #[serde(flatten)]
+    pub fit: FitReport,
+    /// Wall time of the whole command, seconds.
+    pub wall_seconds: f64,
+}
+
+struct Source {
+    path: PathBuf,
+    kind: &'static str,
+    sections: Vec<crate::fit::section::Section>,
+    targets: Vec<GirthTarget>,
+    units: Units,
+    up: Up,
+    band: Option<[f64; 2]>,
+}
+
+fn load(args: &FitArgs) -> Result<Source, FitError> {
+    if let Some(p) = &args.sections {
+        let f = input::read(p)?;
+        let units = f.units.or(args.units).unwrap_or(Units::M);
+        let mut targets = section_targets(&f.sections, "section");
+        for (t, n) in targets.iter_mut().zip(&f.names) {
+            if let Some(n) = n {
+                t.name = n.clone();
+            }
+        }
+        return Ok(Source {
+            path: p.clone(),
+            kind: "sections",
+            sections: f.sections,
+            targets,
+            units,
+            up: Up::Z,
+            band: None,
+        });
+    }
+    if let Some(p) = &args.measurements {
+        let m = measurements::read(p)?;
+        let (sections, targets, units) = measurements::sections(&m, p, args.levels.unwrap_or(41))?;
+        return Ok(Source {
+            path: p.clone(),
+            kind: "measurements",
+            sections,
+            targets,
+            units,
+            up: Up::Z,
+            band: None,
+        });
+    }
+    let p = args.from_mesh.as_ref().expect("clap requires one source");
+    let mut body = io::read_mesh(p, &ReadOptions::default())?.mesh;
+    if body.faces.is_empty() {
+        return Err(FitError::Options(format!(
+            "{}: the mesh has no faces",
+            p.display()
+        )));
+    }
+    prepare(&mut body, &PrepareOptions::default());
+    change_up(&mut body, args.up, Up::Z);
+    let opts = ScanOptions {
+        levels: args.levels.unwrap_or(60),
+        from: args.from,
+        to: args.to,
+    };
+    let (sections, (from, to)) = torso_sections(&body, &opts)?;
+    let targets = section_targets(&sections, "level");
+    Ok(Source {
+        path: p.clone(),
+        kind: "scan",
+        sections,
+        targets,
+        units: args.units.unwrap_or(Units::M),
+        up: args.up,
+        band: Some([from, to]),
+    })
+}
+
+/// Runs `drapekit fit`.
+pub fn run(args: FitArgs) -> anyhow::Result<()> {
+    let start = Instant::now();
+    let wopts = WriteOptions {
+        format: args.format,
+        ascii: args.ascii,
+    };
+    io::output_format(&args.output, &wopts)?;
+    if args.measurements.is_none() && args.levels.is_some() && args.from_mesh.is_none() {
+        anyhow::bail!("--levels applies to --measurements and --from-mesh; a sections file has its own sections");
+    }
+    if args.from_mesh.is_none() && (args.from.is_some() || args.to.is_some()) {
+        anyhow::bail!("--from and --to set the slicing band of --from-mesh");
+    }
+    let src = load(&args)?;
+    let tolerance = args
+        .tolerance
+        .map(|(v, u)| v * u.map_or(1.0, |u| Units::factor(u, src.units)));
+    let opts = FitOptions {
+        nodes_around: args.nodes,
+        lanczos: usize::from(args.lanczos),
+        stride: args.stride,
+        along: args.along,
+        around: args.around,
+        caps: !args.open,
+        tolerance,
+    };
+    let fitted = fit_sections(src.sections, &src.targets, &opts)?;
+    let mut mesh = fitted.mesh;
+    let out_units = args.to_units.unwrap_or(src.units);
+    scale(&mut mesh, Units::factor(src.units, out_units));
+    let out_up = args.to_up.unwrap_or(src.up);
+    change_up(&mut mesh, Up::Z, out_up);
+    let inputs = [src.path.as_path()];
+    io::write_mesh(&args.output, &mesh, &wopts, &inputs)?;
+    let report = FitCliReport {
+        input: src.path.display().to_string(),
+        source: src.kind,
+        output: args.output.display().to_string(),
+        units: src.units,
+        output_units: out_units,
+        output_up: out_up,
+        band: src.band,
+        fit: fitted.report,
+        wall_seconds: start.elapsed().as_secs_f64(),
+    };
+    if let Some(r) = &args.report {
+        let all = [src.path.as_path(), args.output.as_path()];
+        write_report(r, &report, &all).with_context(|| {
+            format!(
+                "the form was written to {}, the report was not",
+                args.output.display()
+            )
+        })?;
+    }
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        print_summary(&report, &args.output);
+    }
+    Ok(())
+}
+
+fn print_summary(r: &FitCliReport, out: &Path) {
+    let f = &r.fit;
+    println!(
+        "{} ({}, {} sections) -> {} ({} vertices, {} faces, {}, {} {}-up)",
+        r.input,
+        r.source,
+        f.sections_given,
+        out.display(),
+        f.output.vertices,
+        f.output.faces,
+        f.output.shell_state,
+        r.output_units,
+        r.output_up
+    );
+    println!(
+        "  nodes: {} along x {} around, Lanczos order {}",
+        f.nodes_along, f.nodes_around, f.lanczos
+    );
+    let e = &f.estimated_error;
+    match e.total {
+        Some(t) => println!(
+            "  estimated error {:.3e} {} (around {:.3e}, along {:.3e})",
+            t,
+            r.units,
+            e.around,
+            e.along.unwrap_or(f64::NAN)
+        ),
+        None => println!(
+            "  estimated error around {:.3e} {} (too few sections to estimate along)",
+            e.around, r.units
+        ),
+    }
+    if let Some(c) = &f.tolerance {
+        println!(
+            "  tolerance {:.3e} {}: chose {} nodes around, stride {}, order {} ({})",
+            c.tolerance,
+            r.units,
+            c.nodes_around,
+            c.stride,
+            c.lanczos,
+            if c.met { "met" } else { "NOT met" }
+        );
+    }
+    let named: Vec<_> = f
+        .girths
+        .iter()
+        .filter(|g| !g.name.starts_with("section ") && !g.name.starts_with("level "))
+        .collect();
+    for g in &named {
+        println!(
+            "  {:<10} at {:.4}: requested {:.4}, measured {:.4} ({:+.3}%)",
+            g.name,
+            g.height,
+            g.requested,
+            g.measured,
+            100.0 * g.deviation
+        );
+    }
+    println!(
+        "  largest girth deviation {:.3}% over {} levels; {:.3} s",
+        100.0 * f.max_girth_deviation,
+        f.girths.len(),
+        r.wall_seconds
+    );
+    for w in &f.warnings {
+        println!("  warning: {w}");
+    }
+}

@@ -1,0 +1,79 @@
+//! Errors of fitting: bad input files, bad sections, bad measurements, bad scans.
+
+use std::path::PathBuf;
+
+/// Everything that stops a fit, with the file, line or key, and section it concerns.
+#[derive(Debug, thiserror::Error)]
+pub enum FitError {
+    /// The input file could not be read.
+    #[error("cannot read {}: {source}", path.display())]
+    Read {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// A JSON sections file is malformed.
+    #[error("{}:{line}:{column}: {message}", path.display())]
+    Json {
+        path: PathBuf,
+        line: usize,
+        column: usize,
+        message: String,
+    },
+    /// A TOML measurements file is malformed.
+    #[error("{}: {message}", path.display())]
+    Toml { path: PathBuf, message: String },
+    /// A CSV sections file is malformed.
+    #[error("{}:{line}: {message}", path.display())]
+    Csv {
+        path: PathBuf,
+        line: usize,
+        message: String,
+    },
+    /// A value outside what it may be.
+    #[error("{}: key '{key}': {message}", path.display())]
+    Key {
+        path: PathBuf,
+        key: String,
+        message: String,
+    },
+    /// Too few sections for a surface.
+    #[error("{found} section(s): a surface needs at least 3 at different heights")]
+    TooFewSections { found: usize },
+    /// A section with too few distinct points.
+    #[error("section {section} (height {height}): {found} distinct point(s); a section needs at least 3")]
+    TooFewPoints {
+        section: usize,
+        height: f64,
+        found: usize,
+    },
+    /// A section with no area.
+    #[error("section {section} (height {height}) is degenerate: its points are collinear (area {area:e})")]
+    Degenerate {
+        section: usize,
+        height: f64,
+        area: f64,
+    },
+    /// Two different sections at one height.
+    #[error("sections {first} and {second} are both at height {height} but differ: give one section per height")]
+    DuplicateHeight {
+        first: usize,
+        second: usize,
+        height: f64,
+    },
+    /// NaN or infinity in a section.
+    #[error("section {section}: {what} is not a finite number")]
+    NonFinite { section: usize, what: String },
+    /// The scan has no torso loop at a level.
+    #[error("scan level {level} (height {height:.4}): {reason}")]
+    Scan {
+        level: usize,
+        height: f64,
+        reason: String,
+    },
+    /// A mesh could not be read.
+    #[error(transparent)]
+    Mesh(#[from] crate::io::IoError),
+    /// Options that cannot work together.
+    #[error("{0}")]
+    Options(String),
+}

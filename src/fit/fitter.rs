@@ -1,0 +1,535 @@
+//! From sections to a form: nodes, fit, error estimates, node choice by tolerance, mesh, girths.
+//!
+//! **Nodes.** Every section is resampled to `N` points by arc length (`section`); the `K`
+//! sections (every `stride`-th of those given) are the nodes along.
+//!
+//! **Estimated error** (input units), reported and used by `--tolerance`:
+//! * *around*: each section's `N`-node trigonometric interpolant against the section itself,
+//!   sampled at `max(4N, 1024)` arc-length positions between the nodes (held out): the largest
+//!   distance over all sections;
+//! * *along*: for a stride `s > 1`, the fit through every `s`-th section against the sections
+//!   it leaves out (held out); for `s = 1` there is nothing left out, so the fit through every
+//!   other section is measured against the ones it leaves out and divided by `2^(2m+1)`, the
+//!   convergence the Lanczos correction of order `m` guarantees (smooth data converge faster,
+//!   so this errs high); with fewer than 5 sections it cannot be estimated;
+//! * the total is their sum.
+//!
+//! **Tolerance** (`--tolerance`): the smallest `N` whose around error is at most half the
+//! tolerance, then the fewest sections (largest stride dividing `K - 1`) and lowest order whose
+//! along error is at most the other half. "Model only what the scene requires."
+//!
+//! **Girths**: the output mesh is sliced at each requested height and the convex-hull perimeter
+//! of the section (the tape-measure girth) compared with the requested value.
+
+use super::error::FitError;
+use super::lanczos;
+use super::section::{self, Section, SectionNotes};
+use super::surface::{self, Surface};
+use super::trig;
+use crate::math::{Point2, Point3};
+use crate::mesh::diagnose::{diagnose, ShellState};
+use crate::mesh::slice::{girth, slice};
+use crate::mesh::TriMesh;
+use realfft::RealFftPlanner;
+use serde::Serialize;
+
+/// How to fit and tessellate. `Default` gives the documented defaults.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FitOptions {
+    /// Points per section used as nodes around (default 128).
+    pub nodes_around: usize,
+    /// Lanczos order along the height: 0, 1 or 2 (default 1).
+    pub lanczos: usize,
+    /// Use every `stride`-th section as a node (default 1: all).
+    pub stride: usize,
+    /// Rings of the output mesh along the height, at least (default 129): rounded up to
+    /// `(K - 1) s + 1` so that every section used is a ring.
+    pub along: usize,
+    /// Points of each output ring (default 128).
+    pub around: usize,
+    /// Close the top and bottom (default true).
+    pub caps: bool,
+    /// Choose nodes and order for this largest error, in input units (default none).
+    pub tolerance: Option<f64>,
+}
+
+impl Default for FitOptions {
+    fn default() -> Self {
+        FitOptions {
+            nodes_around: 128,
+            lanczos: 1,
+            stride: 1,
+            along: 129,
+            around: 128,
+            caps: true,
+            tolerance: None,
+        }
+    }
+}
+
+/// A girth the form should have.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct GirthTarget {
+    /// Its name (`bust`, `section 3`, ...).
+    pub name: String,
+    /// Height of the level.
+    pub height: f64,
+    /// Requested girth.
+    pub requested: f64,
+}
+
+/// A requested girth and the girth measured on the output.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct GirthCheck {
+    /// Its name.
+    pub name: String,
+    /// Height of the level.
+    pub height: f64,
+    /// Requested girth.
+    pub requested: f64,
+    /// Convex-hull perimeter of the output's section at that height.
+    pub measured: f64,
+    /// (measured - requested) / requested.
+    pub deviation: f64,
+}
+
+/// The estimated error of a fit, in input units.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ErrorEstimate {
+    /// Around the sections (held-out points between the nodes).
+    pub around: f64,
+    /// Along the height (held-out sections, or the half-density extrapolation).
+    pub along: Option<f64>,
+    /// For stride 1: the measured error of the half-density fit behind `along`.
+    pub along_half_density: Option<f64>,
+    /// `around + along`.
+    pub total: Option<f64>,
+}
+
+/// What `--tolerance` chose.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Choice {
+    /// The tolerance, input units.
+    pub tolerance: f64,
+    /// Nodes around chosen.
+    pub nodes_around: usize,
+    /// Stride chosen (sections used = (given - 1) / stride + 1).
+    pub stride: usize,
+    /// Lanczos order chosen.
+    pub lanczos: usize,
+    /// The error it expects.
+    pub expected_error: Option<f64>,
+    /// Whether the tolerance is met.
+    pub met: bool,
+}
+
+/// The output mesh.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct OutputInfo {
+    /// Rings along.
+    pub along: usize,
+    /// Points per ring.
+    pub around: usize,
+    /// Capped top and bottom.
+    pub caps: bool,
+    /// Vertices.
+    pub vertices: usize,
+    /// Triangles.
+    pub faces: usize,
+    /// Shell state (closed when capped).
+    pub shell_state: ShellState,
+    /// Enclosed volume (capped forms).
+    pub volume: f64,
+}
+
+/// The fit report (the library part; the CLI adds paths, units and time).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FitReport {
+    /// Sections given.
+    pub sections_given: usize,
+    /// Sections used as nodes along.
+    pub nodes_along: usize,
+    /// Stride through the given sections.
+    pub stride: usize,
+    /// Points per section used as nodes around.
+    pub nodes_around: usize,
+    /// Lanczos order asked for.
+    pub lanczos_requested: usize,
+    /// Lanczos order used (lowered when there are too few sections).
+    pub lanczos: usize,
+    /// Estimated error.
+    pub estimated_error: ErrorEstimate,
+    /// What the tolerance chose, when one was given.
+    pub tolerance: Option<Choice>,
+    /// Requested girths against the output.
+    pub girths: Vec<GirthCheck>,
+    /// Largest |deviation| of the girths.
+    pub max_girth_deviation: f64,
+    /// The output mesh.
+    pub output: OutputInfo,
+    /// What normalising the sections did.
+    pub sections: SectionNotes,
+    /// Things to know.
+    pub warnings: Vec<String>,
+}
+
+/// A fitted form.
+#[derive(Debug, Clone)]
+pub struct Fitted {
+    /// The tessellated form.
+    pub mesh: TriMesh,
+    /// The surface.
+    pub surface: Surface,
+    /// The report.
+    pub report: FitReport,
+}
+
+/// The `K x N` node grid of sections (row after row).
+pub fn node_grid(sections: &[Section], n: usize) -> Vec<Point3> {
+    sections
+        .iter()
+        .flat_map(|s| {
+            section::resample(&s.points, n)
+                .into_iter()
+                .map(move |p| Point3::new(p.x, p.y, s.height))
+        })
+        .collect()
+}
+
+/// Around error: each section's `n`-node interpolant against the section at held-out points.
+pub fn around_error(sections: &[Section], n: usize) -> f64 {
+    let mut planner = RealFftPlanner::new();
+    let fine_n = (4 * n).max(1024);
+    let mut worst: f64 = 0.0;
+    for s in sections {
+        let nodes = section::resample(&s.points, n);
+        let fine = section::resample(&s.points, fine_n);
+        let xs: Vec<f64> = nodes.iter().map(|p| p.x).collect();
+        let ys: Vec<f64> = nodes.iter().map(|p| p.y).collect();
+        let cx = trig::coefficients(&mut planner, &xs);
+        let cy = trig::coefficients(&mut planner, &ys);
+        let fx = trig::resample(&mut planner, &cx, n, fine_n);
+        let fy = trig::resample(&mut planner, &cy, n, fine_n);
+        for (i, p) in fine.iter().enumerate() {
+            worst = worst.max((Point2::new(fx[i], fy[i]) - p).norm());
+        }
+    }
+    worst
+}
+
+/// Along error of the fit through every `stride`-th section, measured at the others; with
+/// `stride == 1`, the half-density extrapolation (see the module docs). Returns
+/// (estimate, measured half-density error).
+pub fn along_error(
+    sections: &[Section],
+    n: usize,
+    stride: usize,
+    m: usize,
+) -> (Option<f64>, Option<f64>) {
+    let k = sections.len();
+    if stride > 1 {
+        return (Some(held_out_error(sections, n, stride, m)), None);
+    }
+    // Every other section of an odd count (dropping the last one if the count is even).
+    let usable = if k % 2 == 1 { k } else { k - 1 };
+    if usable < 5 {
+        return (None, None);
+    }
+    let half = held_out_error(&sections[..usable], n, 2, m);
+    let m_full = lanczos::order_for(k, m);
+    (Some(half / 2f64.powi(2 * m_full as i32 + 1)), Some(half))
+}
+
+/// The fit through every `stride`-th section (count - 1 divisible by stride) against the others.
+fn held_out_error(sections: &[Section], n: usize, stride: usize, m: usize) -> f64 {
+    let k = sections.len();
+    let used: Vec<Section> = sections.iter().step_by(stride).cloned().collect();
+    let ks = used.len();
+    let s = surface::fit(&node_grid(&used, n), ks, n, m);
+    let mut worst: f64 = 0.0;
+    for (idx, sec) in sections.iter().enumerate().take(k - 1) {
+        if idx % stride == 0 {
+            continue;
+        }
+        let v = idx as f64 / stride as f64 / (ks - 1) as f64;
+        let truth = section::resample(&sec.points, n);
+        let ring = s.eval_ring(v, n);
+        for (t, p) in truth.iter().zip(&ring) {
+            worst = worst.max((Point3::new(t.x, t.y, sec.height) - p).norm());
+        }
+    }
+    worst
+}
+
+const AROUND_CANDIDATES: [usize; 16] = [
+    8, 12, 16, 24, 32, 48, 64, 96, 128, 192, 256, 384, 512, 768, 1024, 2048,
+];
+
+/// Fits a form through `sections` (see the module docs).
+pub fn fit_sections(
+    sections: Vec<Section>,
+    targets: &[GirthTarget],
+    opts: &FitOptions,
+) -> Result<Fitted, FitError> {
+    if opts.nodes_around < 3 || opts.around < 3 || opts.along < 2 || opts.stride < 1 {
+        return Err(FitError::Options(
+            "nodes around and points around must be at least 3, rings along at least 2".into(),
+        ));
+    }
+    if opts.lanczos > lanczos::MAX_ORDER {
+        return Err(FitError::Options(format!(
+            "Lanczos order {} is not supported: use 0, 1 or 2",
+            opts.lanczos
+        )));
+    }
+    let given = sections.len();
+    let (sections, notes) = section::normalize(sections)?;
+    let mut warnings = Vec::new();
+    if notes.merged_duplicates > 0 {
+        warnings.push(format!(
+            "{} section(s) given twice at one height were merged",
+            notes.merged_duplicates
+        ));
+    }
+    let k_all = sections.len();
+
+    let (n, stride, m_req, choice) = match opts.tolerance {
+        None => (opts.nodes_around, opts.stride, opts.lanczos, None),
+        Some(tol) => choose(&sections, tol, &mut warnings),
+    };
+    if (k_all - 1) % stride != 0 {
+        return Err(FitError::Options(format!(
+            "stride {stride} does not divide the {} intervals between {k_all} sections",
+            k_all - 1
+        )));
+    }
+    let used: Vec<Section> = sections.iter().step_by(stride).cloned().collect();
+    let k = used.len();
+    if k < 3 {
+        return Err(FitError::TooFewSections { found: k });
+    }
+    let m = lanczos::order_for(k, m_req);
+    if m < m_req {
+        warnings.push(format!(
+            "Lanczos order lowered from {m_req} to {m}: order {m_req} needs at least {} sections, there are {k}",
+            lanczos::nodes_needed(m_req)
+        ));
+    }
+    let surface = surface::fit(&node_grid(&used, n), k, n, m);
+    let around = around_error(&used, n);
+    let (along, along_half) = along_error(&sections, n, stride, m);
+    if along.is_none() {
+        warnings.push("too few sections to estimate the error along the height".into());
+    }
+    let estimated_error = ErrorEstimate {
+        around,
+        along,
+        along_half_density: along_half,
+        total: along.map(|a| a + around),
+    };
+    // Every section is a ring: the output passes through the nodes, where the girths are.
+    let per = (opts.along.max(2) - 1).div_ceil(k - 1);
+    let along = (k - 1) * per + 1;
+    let mesh = surface.tessellate(along, opts.around, opts.caps);
+    let d = diagnose(&mesh);
+    if opts.caps && d.shell_state != ShellState::Closed {
+        warnings.push(format!(
+            "the form is not closed (shell state {}): check the sections for self-intersections",
+            d.shell_state
+        ));
+    }
+    let girths = measure_girths(&mesh, targets);
+    let max_girth_deviation = girths.iter().map(|g| g.deviation.abs()).fold(0.0, f64::max);
+    let report = FitReport {
+        sections_given: given,
+        nodes_along: k,
+        stride,
+        nodes_around: n,
+        lanczos_requested: m_req,
+        lanczos: m,
+        estimated_error,
+        tolerance: choice,
+        girths,
+        max_girth_deviation,
+        output: OutputInfo {
+            along,
+            around: opts.around,
+            caps: opts.caps,
+            vertices: mesh.positions.len(),
+            faces: mesh.faces.len(),
+            shell_state: d.shell_state,
+            volume: d.total_volume,
+        },
+        sections: notes,
+        warnings,
+    };
+    Ok(Fitted {
+        mesh,
+        surface,
+        report,
+    })
+}
+
+/// The tolerance choice: (nodes around, stride, order, report).
+fn choose(
+    sections: &[Section],
+    tol: f64,
+    warnings: &mut Vec<String>,
+) -> (usize, usize, usize, Option<Choice>) {
+    let half = tol / 2.0;
+    let mut n = *AROUND_CANDIDATES.last().unwrap();
+    let mut around_best = f64::INFINITY;
+    for &cand in &AROUND_CANDIDATES {
+        let e = around_error(sections, cand);
+        if e < around_best {
+            around_best = e;
+            n = cand;
+        }
+        if e <= half {
+            n = cand;
+            around_best = e;
+            break;
+        }
+    }
+    let k = sections.len();
+    let mut best: Option<(usize, usize, f64)> = None;
+    let mut chosen = None;
+    'strides: for stride in (1..k)
+        .rev()
+        .filter(|&s| (k - 1).is_multiple_of(s) && (k - 1) / s + 1 >= 3)
+    {
+        for m in 0..=lanczos::MAX_ORDER {
+            let ks = (k - 1) / stride + 1;
+            if lanczos::order_for(ks, m) < m {
+                continue;
+            }
+            let (e, _) = along_error(sections, n, stride, m);
+            let Some(e) = e else { continue };
+            if best.is_none_or(|(_, _, b)| e < b) {
+                best = Some((stride, m, e));
+            }
+            if e <= half {
+                chosen = Some((stride, m, e));
+                break 'strides;
+            }
+        }
+    }
+    let met = chosen.is_some() && around_best <= half;
+    let (stride, m, along) = chosen.or(best).unwrap_or((1, 1, f64::NAN));
+    if !met {
+        warnings.push(format!("tolerance {tol} is not reachable with these sections: the best expected error is {:.3e}", around_best + along));
+    }
+    let expected = (around_best + along)
+        .is_finite()
+        .then_some(around_best + along);
+    (
+        n,
+        stride,
+        m,
+        Some(Choice {
+            tolerance: tol,
+            nodes_around: n,
+            stride,
+            lanczos: m,
+            expected_error: expected,
+            met,
+        }),
+    )
+}
+
+/// Slices `mesh` at each target height and measures the convex-hull girth.
+pub fn measure_girths(mesh: &TriMesh, targets: &[GirthTarget]) -> Vec<GirthCheck> {
+    let Some(b) = mesh.bbox() else {
+        return Vec::new();
+    };
+    let eps = 1e-9 * (b.max.z - b.min.z).max(f64::MIN_POSITIVE);
+    targets
+        .iter()
+        .map(|t| {
+            let h = t.height.clamp(b.min.z + eps, b.max.z - eps);
+            let pts: Vec<Point2> = slice(mesh, h).iter().flat_map(|l| l.xy()).collect();
+            let measured = if pts.len() >= 3 {
+                girth(&pts)
+            } else {
+                f64::NAN
+            };
+            GirthCheck {
+                name: t.name.clone(),
+                height: t.height,
+                requested: t.requested,
+                measured,
+                deviation: (measured - t.requested) / t.requested,
+            }
+        })
+        .collect()
+}
+
+/// The girth targets of sections themselves: each section's convex-hull perimeter.
+pub fn section_targets(sections: &[Section], label: &str) -> Vec<GirthTarget> {
+    sections
+        .iter()
+        .enumerate()
+        .map(|(i, s)| GirthTarget {
+            name: format!("{label} {}", i + 1),
+            height: s.height,
+            requested: girth(&s.points),
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Elliptic sections with radius varying non-periodically along the height.
+    fn sections(k: usize, pts: usize) -> Vec<Section> {
+        (0..k)
+            .map(|i| {
+                let z = 0.3 + 1.2 * i as f64 / (k - 1) as f64;
+                let r = 0.2 + 0.05 * (3.0 * z).sin() + 0.02 * z * z;
+                let points = (0..pts)
+                    .map(|l| {
+                        let t = std::f64::consts::TAU * l as f64 / pts as f64;
+                        Point2::new(r * t.cos(), 0.7 * r * t.sin())
+                    })
+                    .collect();
+                Section { height: z, points }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn fit_reports_girths_and_closes() {
+        let s = sections(21, 400);
+        let targets = section_targets(&s, "section");
+        let f = fit_sections(s, &targets, &FitOptions::default()).unwrap();
+        assert_eq!(f.report.output.shell_state, ShellState::Closed);
+        assert!(
+            f.report.max_girth_deviation < 1e-3,
+            "{}",
+            f.report.max_girth_deviation
+        );
+        let e = &f.report.estimated_error;
+        assert!(e.around < 1e-4 && e.along.unwrap() < 1e-3, "{e:?}");
+    }
+
+    #[test]
+    fn tolerance_models_only_what_is_required() {
+        let s = sections(41, 400);
+        let loose = FitOptions {
+            tolerance: Some(5e-3),
+            ..FitOptions::default()
+        };
+        let tight = FitOptions {
+            tolerance: Some(1e-5),
+            ..FitOptions::default()
+        };
+        let a = fit_sections(s.clone(), &[], &loose).unwrap().report;
+        let b = fit_sections(s, &[], &tight).unwrap().report;
+        let (ca, cb) = (a.tolerance.unwrap(), b.tolerance.unwrap());
+        assert!(ca.met && cb.met, "{ca:?} {cb:?}");
+        assert!(ca.nodes_around < cb.nodes_around, "{ca:?} {cb:?}");
+        assert!(a.nodes_along <= b.nodes_along);
+        assert!(ca.expected_error.unwrap() <= 5e-3 && cb.expected_error.unwrap() <= 1e-5);
+    }
+}

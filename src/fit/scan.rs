@@ -1,0 +1,156 @@
+//! Torso sections from a scanned body mesh.
+//!
+//! The body (Z-up, prepared: welded and oriented) is sliced at `levels` evenly spaced heights
+//! between `from` and `to` (default: 0.48 and 0.74 of the body's height above its lowest point,
+//! between the crotch and the armpits of a standing body). A slice holds several closed loops:
+//! the torso, and the arms and legs (and fingers) as separate loops.
+//!
+//! **Which loop is the torso.** At the middle level, the loop of largest area. From there,
+//! level by level up and down, the loop that contains the previous level's torso centroid
+//! (arms and legs lie beside it and do not); if several do, the largest. The band must stay
+//! inside the torso: a level where no loop contains that centroid (the torso splits into legs),
+//! or whose torso loop swallows another loop of the level before it (an arm joining at the
+//! armpit: any loop of at least 1% of the torso's area), stops the fit with an error naming the
+//! level, so the user can narrow `--from`/`--to`.
+
+use super::error::FitError;
+use super::section::{centroid, signed_area2, Section};
+use crate::math::Point2;
+use crate::mesh::slice::slice;
+use crate::mesh::TriMesh;
+
+/// Where to slice a scan.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ScanOptions {
+    /// Number of slices (default 60).
+    pub levels: usize,
+    /// Lowest slice height (default: 0.48 of the body height above its lowest point).
+    pub from: Option<f64>,
+    /// Highest slice height (default: 0.74 of the body height above its lowest point).
+    pub to: Option<f64>,
+}
+
+impl Default for ScanOptions {
+    fn default() -> Self {
+        ScanOptions {
+            levels: 60,
+            from: None,
+            to: None,
+        }
+    }
+}
+
+/// Default band, as fractions of the body's height.
+pub const DEFAULT_BAND: (f64, f64) = (0.48, 0.74);
+
+/// Whether `p` is inside the closed polygon (even-odd rule).
+pub fn contains(poly: &[Point2], p: &Point2) -> bool {
+    let mut inside = false;
+    let n = poly.len();
+    for i in 0..n {
+        let (a, b) = (poly[i], poly[(i + 1) % n]);
+        if (a.y > p.y) != (b.y > p.y) && p.x < a.x + (p.y - a.y) / (b.y - a.y) * (b.x - a.x) {
+            inside = !inside;
+        }
+    }
+    inside
+}
+
+/// The torso sections of a Z-up body mesh, and the band `(from, to)` they span.
+pub fn torso_sections(
+    body: &TriMesh,
+    opts: &ScanOptions,
+) -> Result<(Vec<Section>, (f64, f64)), FitError> {
+    let b = body
+        .bbox()
+        .ok_or_else(|| FitError::Options("the body mesh is empty".into()))?;
+    let height = b.max.z - b.min.z;
+    let from = opts.from.unwrap_or(b.min.z + DEFAULT_BAND.0 * height);
+    let to = opts.to.unwrap_or(b.min.z + DEFAULT_BAND.1 * height);
+    if from >= to || from <= b.min.z || to >= b.max.z || from.is_nan() || to.is_nan() {
+        return Err(FitError::Options(format!(
+            "the band --from {from} --to {to} must be increasing and inside the body's height range {} .. {}",
+            b.min.z, b.max.z
+        )));
+    }
+    if opts.levels < 3 {
+        return Err(FitError::Options(format!(
+            "--levels {} : a surface needs at least 3 levels",
+            opts.levels
+        )));
+    }
+    let k = opts.levels;
+    let heights: Vec<f64> = (0..k)
+        .map(|i| from + (to - from) * i as f64 / (k - 1) as f64)
+        .collect();
+    let loops: Vec<Vec<Vec<Point2>>> = heights
+        .iter()
+        .map(|&h| {
+            slice(body, h)
+                .into_iter()
+                .filter(|l| l.closed && l.points.len() >= 3)
+                .map(|l| l.xy())
+                .collect()
+        })
+        .collect();
+    let area = |p: &Vec<Point2>| signed_area2(p).abs();
+    let mid = k / 2;
+    let first = loops[mid]
+        .iter()
+        .max_by(|a, b| area(a).total_cmp(&area(b)))
+        .ok_or_else(|| FitError::Scan {
+            level: mid + 1,
+            height: heights[mid],
+            reason: "the slice is empty: the body does not reach this height".into(),
+        })?;
+    let mut torso: Vec<Option<Vec<Point2>>> = vec![None; k];
+    torso[mid] = Some(first.clone());
+    let order: Vec<(usize, usize)> = (mid + 1..k)
+        .map(|i| (i, i - 1))
+        .chain((0..mid).rev().map(|i| (i, i + 1)))
+        .collect();
+    for (i, prev) in order {
+        let prev_torso = torso[prev].as_ref().unwrap();
+        let c = centroid(prev_torso);
+        let pick = loops[i]
+            .iter()
+            .filter(|l| contains(l, &c))
+            .max_by(|a, b| area(a).total_cmp(&area(b)));
+        match pick {
+            Some(l) => {
+                let limb = loops[prev].iter().filter(|o| *o != prev_torso && area(o) >= 0.01 * area(prev_torso)).find(|o| contains(l, &centroid(o)));
+                if let Some(o) = limb {
+                    let oc = centroid(o);
+                    return Err(FitError::Scan {
+                        level: i + 1,
+                        height: heights[i],
+                        reason: format!(
+                            "the torso joins the loop at ({:.4}, {:.4}) of the level next to it (an arm or a leg): the torso splits here (crotch or armpits); choose --from/--to inside the torso",
+                            oc.x, oc.y
+                        ),
+                    });
+                }
+                torso[i] = Some(l.clone());
+            }
+            None => {
+                return Err(FitError::Scan {
+                    level: i + 1,
+                    height: heights[i],
+                    reason: format!(
+                        "no loop contains the torso centre ({:.4}, {:.4}) of the level next to it: the torso splits here (crotch or armpits); choose --from/--to inside the torso",
+                        c.x, c.y
+                    ),
+                })
+            }
+        }
+    }
+    let sections = heights
+        .iter()
+        .zip(torso)
+        .map(|(&h, t)| Section {
+            height: h,
+            points: t.unwrap(),
+        })
+        .collect();
+    Ok((sections, (from, to)))
+}

@@ -1,0 +1,250 @@
+//! Closest points on a triangle mesh: the distance from a point to a surface.
+//!
+//! Faces are listed in the cells of a uniform grid their bounding boxes overlap (about two faces
+//! per cell). A query visits shells of cells around the point's cell, nearest first, and stops
+//! when the best distance found is below the distance to the next shell. The point-triangle
+//! test is the Voronoi-region method of Ericson, *Real-Time Collision Detection*, 5.1.5.
+
+use super::TriMesh;
+use crate::math::{Aabb, Point3, Vec3};
+
+/// The closest point of triangle (a, b, c) to p.
+pub fn closest_on_triangle(p: &Point3, a: &Point3, b: &Point3, c: &Point3) -> Point3 {
+    let ab = b - a;
+    let ac = c - a;
+    let ap = p - a;
+    let d1 = ab.dot(&ap);
+    let d2 = ac.dot(&ap);
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return *a;
+    }
+    let bp = p - b;
+    let d3 = ab.dot(&bp);
+    let d4 = ac.dot(&bp);
+    if d3 >= 0.0 && d4 <= d3 {
+        return *b;
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        return a + ab * (d1 / (d1 - d3));
+    }
+    let cp = p - c;
+    let d5 = ab.dot(&cp);
+    let d6 = ac.dot(&cp);
+    if d6 >= 0.0 && d5 <= d6 {
+        return *c;
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        return a + ac * (d2 / (d2 - d6));
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+    }
+    let denom = 1.0 / (va + vb + vc);
+    a + ab * (vb * denom) + ac * (vc * denom)
+}
+
+/// A closest-point query structure over a mesh.
+pub struct ClosestPoints<'a> {
+    mesh: &'a TriMesh,
+    bbox: Aabb,
+    cell: f64,
+    dims: [usize; 3],
+    start: Vec<u32>,
+    faces: Vec<u32>,
+}
+
+/// The closest point found.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Hit {
+    /// Distance.
+    pub distance: f64,
+    /// The point on the mesh.
+    pub point: Point3,
+    /// The face it is on.
+    pub face: usize,
+}
+
+impl<'a> ClosestPoints<'a> {
+    /// Builds the grid for `mesh` (which must have faces).
+    pub fn new(mesh: &'a TriMesh) -> ClosestPoints<'a> {
+        let bbox = mesh.bbox().expect("a mesh with vertices");
+        let size = bbox.size();
+        let target = (mesh.faces.len().max(1) as f64 / 2.0).max(1.0);
+        let volume = size.x.max(1e-12) * size.y.max(1e-12) * size.z.max(1e-12);
+        let mut cell = (volume / target).cbrt();
+        let max_dim = size.max();
+        if cell.is_nan() || cell <= 0.0 || max_dim / cell > 512.0 {
+            cell = max_dim / 512.0;
+        }
+        let cell = cell.max(max_dim * 1e-9).max(f64::MIN_POSITIVE);
+        let dims = [0, 1, 2].map(|k| ((size[k] / cell).floor() as usize + 1).min(1024));
+        let cell_of = |x: f64, k: usize| {
+            (((x - bbox.min[k]) / cell).floor().max(0.0) as usize).min(dims[k] - 1)
+        };
+        let lin = |i: usize, j: usize, k: usize| i + dims[0] * (j + dims[1] * k);
+        let ncell = dims[0] * dims[1] * dims[2];
+        let mut count = vec![0u32; ncell + 1];
+        let ranges: Vec<[usize; 6]> = (0..mesh.faces.len())
+            .map(|f| {
+                let c = mesh.corners(f);
+                let mut r = [0usize; 6];
+                for k in 0..3 {
+                    let lo = c.iter().map(|p| p[k]).fold(f64::INFINITY, f64::min);
+                    let hi = c.iter().map(|p| p[k]).fold(f64::NEG_INFINITY, f64::max);
+                    r[k] = cell_of(lo, k);
+                    r[k + 3] = cell_of(hi, k);
+                }
+                r
+            })
+            .collect();
+        for r in &ranges {
+            for k in r[2]..=r[5] {
+                for j in r[1]..=r[4] {
+                    for i in r[0]..=r[3] {
+                        count[lin(i, j, k) + 1] += 1;
+                    }
+                }
+            }
+        }
+        for c in 0..ncell {
+            count[c + 1] += count[c];
+        }
+        let start = count.clone();
+        let mut fill = count;
+        let mut faces = vec![0u32; start[ncell] as usize];
+        for (f, r) in ranges.iter().enumerate() {
+            for k in r[2]..=r[5] {
+                for j in r[1]..=r[4] {
+                    for i in r[0]..=r[3] {
+                        let c = lin(i, j, k);
+                        faces[fill[c] as usize] = f as u32;
+                        fill[c] += 1;
+                    }
+                }
+            }
+        }
+        ClosestPoints {
+            mesh,
+            bbox,
+            cell,
+            dims,
+            start,
+            faces,
+        }
+    }
+
+    /// The closest point of the mesh to `p`.
+    pub fn closest(&self, p: &Point3) -> Hit {
+        let dims = self.dims;
+        let home: [i64; 3] =
+            [0, 1, 2].map(|k| ((p[k] - self.bbox.min[k]) / self.cell).floor() as i64);
+        // Distance from p to the grid box, so far-away queries start at the right shell.
+        let outside = {
+            let mut d = Vec3::zeros();
+            for k in 0..3 {
+                d[k] = (self.bbox.min[k] - p[k])
+                    .max(0.0)
+                    .max(p[k] - self.bbox.max[k]);
+            }
+            d.norm()
+        };
+        let mut best = Hit {
+            distance: f64::INFINITY,
+            point: *p,
+            face: usize::MAX,
+        };
+        let max_shell = dims.iter().copied().max().unwrap_or(1) as i64
+            + home.iter().map(|h| h.abs()).max().unwrap_or(0);
+        let mut seen_any = false;
+        for shell in 0..=max_shell {
+            // Every point of shell s is at least (s - 1) cells away from p.
+            let reach = (shell as f64 - 1.0).max(0.0) * self.cell;
+            if seen_any && reach > best.distance {
+                break;
+            }
+            // No cell of this shell can be in the grid while all of it is nearer than the grid.
+            if (shell as f64 + 1.0) * self.cell * 3f64.sqrt() < outside {
+                continue;
+            }
+            let s = shell;
+            for dk in -s..=s {
+                for dj in -s..=s {
+                    for di in -s..=s {
+                        if di.abs() != s && dj.abs() != s && dk.abs() != s {
+                            continue;
+                        }
+                        let (i, j, k) = (home[0] + di, home[1] + dj, home[2] + dk);
+                        if i < 0
+                            || j < 0
+                            || k < 0
+                            || i >= dims[0] as i64
+                            || j >= dims[1] as i64
+                            || k >= dims[2] as i64
+                        {
+                            continue;
+                        }
+                        seen_any = true;
+                        let c = i as usize + dims[0] * (j as usize + dims[1] * k as usize);
+                        for &f in &self.faces[self.start[c] as usize..self.start[c + 1] as usize] {
+                            let [a, b, cc] = self.mesh.corners(f as usize);
+                            let q = closest_on_triangle(p, &a, &b, &cc);
+                            let d = (q - p).norm();
+                            if d < best.distance {
+                                best = Hit {
+                                    distance: d,
+                                    point: q,
+                                    face: f as usize,
+                                };
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        best
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::generate;
+
+    #[test]
+    fn distance_to_a_sphere() {
+        let m = generate::icosphere(4);
+        let q = ClosestPoints::new(&m);
+        for (p, expect) in [
+            (Point3::new(0.0, 0.0, 0.0), 1.0),
+            (Point3::new(3.0, 0.0, 0.0), 2.0),
+            (Point3::new(0.1, 0.5, -0.2), 1.0 - 0.5477),
+        ] {
+            let h = q.closest(&p);
+            assert!((h.distance - expect).abs() < 0.01, "{p:?}: {}", h.distance);
+        }
+    }
+
+    #[test]
+    fn grid_agrees_with_brute_force() {
+        let m = generate::uv_sphere(Point3::new(0.2, -0.1, 0.3), 0.7, 9, 13);
+        let q = ClosestPoints::new(&m);
+        let mut rng = crate::cli::SplitMix(5);
+        for _ in 0..300 {
+            let p = Point3::new(
+                rng.next_f64() * 3.0 - 1.5,
+                rng.next_f64() * 3.0 - 1.5,
+                rng.next_f64() * 3.0 - 1.5,
+            );
+            let brute = (0..m.faces.len())
+                .map(|f| {
+                    let [a, b, c] = m.corners(f);
+                    (closest_on_triangle(&p, &a, &b, &c) - p).norm()
+                })
+                .fold(f64::INFINITY, f64::min);
+            assert!((q.closest(&p).distance - brute).abs() < 1e-12);
+        }
+    }
+}

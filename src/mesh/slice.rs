@@ -1,0 +1,239 @@
+//! Horizontal sections of a triangle mesh (the plane `z = h`), and the tape-measure girth.
+//!
+//! A vertex counts as above the plane when `z >= h`, so a vertex exactly on it is moved up by an
+//! infinitesimal (no special cases). Every face with corners on both sides yields one segment,
+//! from the edge it crosses going down to the edge it crosses going up, in winding order: for an
+//! outward-wound closed surface the loops run counter-clockwise seen from above. Segments are
+//! chained through the mesh edges they end on (an edge is a pair of vertex indices), never by
+//! comparing coordinates, so float noise cannot break or merge loops. A crossing point is
+//! interpolated along its edge from the lower-numbered vertex, so both faces of an edge agree
+//! bit for bit.
+
+use super::TriMesh;
+use crate::math::{Point2, Point3};
+use std::collections::HashMap;
+
+/// One chain of a section.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Loop {
+    /// Points in order (the closing point not repeated).
+    pub points: Vec<Point3>,
+    /// Whether the chain closes (it does on a closed mesh).
+    pub closed: bool,
+}
+
+impl Loop {
+    /// The points projected on the plane.
+    pub fn xy(&self) -> Vec<Point2> {
+        self.points.iter().map(|p| Point2::new(p.x, p.y)).collect()
+    }
+}
+
+#[inline]
+fn key(a: u32, b: u32) -> (u32, u32) {
+    (a.min(b), a.max(b))
+}
+
+/// The section of `mesh` by the plane `z = h`.
+pub fn slice(mesh: &TriMesh, h: f64) -> Vec<Loop> {
+    let above = |v: u32| mesh.positions[v as usize].z >= h;
+    let cross = |a: u32, b: u32| {
+        let (lo, hi) = (a.min(b), a.max(b));
+        let (p, q) = (mesh.positions[lo as usize], mesh.positions[hi as usize]);
+        let t = (h - p.z) / (q.z - p.z);
+        Point3::new(p.x + t * (q.x - p.x), p.y + t * (q.y - p.y), h)
+    };
+    // Segments: from-edge -> (to-edge, point at the from-edge).
+    let mut next: HashMap<(u32, u32), (u32, u32)> = HashMap::new();
+    let mut order: Vec<(u32, u32)> = Vec::new();
+    for f in &mesh.faces {
+        let up: [bool; 3] = f.map(above);
+        if up[0] == up[1] && up[1] == up[2] {
+            continue;
+        }
+        let mut down_edge = None;
+        let mut up_edge = None;
+        for i in 0..3 {
+            let (a, b) = (f[i], f[(i + 1) % 3]);
+            match (up[i], up[(i + 1) % 3]) {
+                (true, false) => down_edge = Some(key(a, b)),
+                (false, true) => up_edge = Some(key(a, b)),
+                _ => {}
+            }
+        }
+        if let (Some(d), Some(u)) = (down_edge, up_edge) {
+            if next.insert(d, u).is_none() {
+                order.push(d);
+            }
+        }
+    }
+    // Chain: start open chains at edges nothing leads to, then the closed loops.
+    let targets: std::collections::HashSet<(u32, u32)> = next.values().copied().collect();
+    let mut used: std::collections::HashSet<(u32, u32)> = std::collections::HashSet::new();
+    let mut loops = Vec::new();
+    let starts: Vec<(u32, u32)> = order
+        .iter()
+        .filter(|e| !targets.contains(e))
+        .copied()
+        .chain(order.iter().copied())
+        .collect();
+    for s in starts {
+        if used.contains(&s) {
+            continue;
+        }
+        let mut pts = Vec::new();
+        let mut e = s;
+        let mut closed = false;
+        loop {
+            used.insert(e);
+            pts.push(cross(e.0, e.1));
+            match next.get(&e) {
+                Some(&n) if n == s => {
+                    closed = true;
+                    break;
+                }
+                Some(&n) if !used.contains(&n) => e = n,
+                Some(&n) => {
+                    // An open chain ends on an edge with no segment leaving it.
+                    if !next.contains_key(&n) {
+                        pts.push(cross(n.0, n.1));
+                    }
+                    break;
+                }
+                None => break,
+            }
+        }
+        if !closed {
+            if let Some(&n) = next.get(&e) {
+                if !used.contains(&n) {
+                    pts.push(cross(n.0, n.1));
+                }
+            }
+        }
+        loops.push(Loop {
+            points: pts,
+            closed,
+        });
+    }
+    loops
+}
+
+/// The convex hull of points in the plane, counter-clockwise, without collinear points
+/// (Andrew's monotone chain).
+pub fn convex_hull(points: &[Point2]) -> Vec<Point2> {
+    let mut p: Vec<Point2> = points.to_vec();
+    p.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
+    p.dedup();
+    if p.len() < 3 {
+        return p;
+    }
+    let cross =
+        |o: &Point2, a: &Point2, b: &Point2| (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x);
+    let mut hull: Vec<Point2> = Vec::with_capacity(2 * p.len());
+    for pass in 0..2 {
+        let start = hull.len();
+        let iter: Box<dyn Iterator<Item = &Point2>> = if pass == 0 {
+            Box::new(p.iter())
+        } else {
+            Box::new(p.iter().rev())
+        };
+        for q in iter {
+            while hull.len() >= start + 2
+                && cross(&hull[hull.len() - 2], &hull[hull.len() - 1], q) <= 0.0
+            {
+                hull.pop();
+            }
+            hull.push(*q);
+        }
+        hull.pop();
+    }
+    hull
+}
+
+/// The tape-measure girth of a set of contours: the perimeter of their convex hull.
+///
+/// ```
+/// use drapekit::math::Point2;
+/// use drapekit::mesh::slice::girth;
+/// let square_with_dent = [(0.0, 0.0), (2.0, 0.0), (2.0, 2.0), (1.0, 1.0), (0.0, 2.0)];
+/// let p: Vec<Point2> = square_with_dent.iter().map(|&(x, y)| Point2::new(x, y)).collect();
+/// assert_eq!(girth(&p), 8.0);
+/// ```
+pub fn girth(points: &[Point2]) -> f64 {
+    let h = convex_hull(points);
+    (0..h.len())
+        .map(|i| (h[(i + 1) % h.len()] - h[i]).norm())
+        .sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::generate;
+
+    #[test]
+    fn sphere_section_is_one_ccw_circle() {
+        let m = generate::icosphere(4);
+        for h in [-0.7, 0.0, 0.31, 0.9] {
+            let loops = slice(&m, h);
+            assert_eq!(loops.len(), 1, "h={h}");
+            let l = &loops[0];
+            assert!(l.closed);
+            let r = (1.0 - h * h).sqrt();
+            for p in &l.points {
+                let d = (p.x * p.x + p.y * p.y).sqrt();
+                assert!(d <= r + 1e-12 && d > r * 0.99, "h={h} d={d} r={r}");
+            }
+            let xy = l.xy();
+            assert!(
+                crate::fit::section::signed_area2(&xy) > 0.0,
+                "counter-clockwise"
+            );
+            // Vertices sit on the sphere, so the section runs on chords just inside the circle.
+            let g = girth(&xy);
+            assert!(
+                g < std::f64::consts::TAU * r && g > 0.995 * std::f64::consts::TAU * r,
+                "h={h} {g}"
+            );
+        }
+    }
+
+    #[test]
+    fn plane_through_vertices_and_two_bodies() {
+        // The cube's vertices lie exactly on z = -0.5 and 0.5. A vertex on the plane counts as
+        // above, so the plane z = 0.5 cuts just below the top and z = -0.5 just below the bottom.
+        let mut m = generate::cube(1.0);
+        let c2 = generate::cube(1.0);
+        let n = m.positions.len() as u32;
+        m.positions.extend(
+            c2.positions
+                .iter()
+                .map(|p| p + crate::math::Vec3::new(3.0, 0.0, 0.0)),
+        );
+        m.faces.extend(c2.faces.iter().map(|f| f.map(|v| v + n)));
+        for h in [0.5, 0.0, 0.2] {
+            let loops = slice(&m, h);
+            assert_eq!(loops.len(), 2, "h={h}");
+            for l in &loops {
+                assert!(l.closed);
+                assert!((girth(&l.xy()) - 4.0).abs() < 1e-12);
+            }
+        }
+        assert!(
+            slice(&m, -0.5).is_empty(),
+            "everything is above: nothing crosses"
+        );
+    }
+
+    #[test]
+    fn open_mesh_gives_open_chains() {
+        let mut m = generate::icosphere(3);
+        let keep: Vec<bool> = (0..m.faces.len())
+            .map(|f| m.corners(f).iter().all(|p| p.x < 0.5))
+            .collect();
+        m.retain_faces(&keep);
+        let loops = slice(&m, 0.0);
+        assert_eq!(loops.len(), 1);
+        assert!(!loops[0].closed);
+    }
+}
