@@ -1,12 +1,12 @@
 //! `drapekit convert IN -o OUT`: read, prepare, write, report.
 
-use super::{write_report, ReadArgs};
+use super::ReadArgs;
 use crate::io::{self, Format, ReadInfo, WriteOptions};
 use crate::mesh::diagnose::ShellState;
 use crate::mesh::prepare::{prepare, PrepareOptions, PrepareReport};
 use crate::mesh::transform::{Units, Up};
 use crate::mesh::weld::WeldTolerance;
-use anyhow::{bail, Context};
+use anyhow::bail;
 use clap::Args;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -195,21 +195,14 @@ pub fn run(args: ConvertArgs) -> anyhow::Result<()> {
         read: read.info,
         prepare: prep,
     };
-    if let Some(r) = &args.report {
-        let all = [args.input.as_path(), args.output.as_path()];
-        write_report(r, &report, &all).with_context(|| {
-            format!(
-                "the mesh was written to {}, the report was not",
-                args.output.display()
-            )
-        })?;
-    }
-    if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
-    } else {
-        print_summary(&report, &args.output);
-    }
-    Ok(())
+    super::finish(
+        &report,
+        args.report.as_deref(),
+        &inputs,
+        &args.output,
+        args.json,
+        |r| print_summary(r, &args.output),
+    )
 }
 
 fn print_summary(r: &ConvertReport, out: &Path) {

@@ -1,13 +1,11 @@
 //! `drapekit fit`: a mannequin from sections, measurements or a scan.
 
-use super::write_report;
 use crate::fit::fitter::{fit_sections, section_targets, FitOptions, FitReport, GirthTarget};
 use crate::fit::scan::{torso_sections, ScanOptions};
 use crate::fit::{input, measurements, FitError};
 use crate::io::{self, Format, ReadOptions, WriteOptions};
 use crate::mesh::prepare::{prepare, PrepareOptions};
 use crate::mesh::transform::{change_up, scale, Units, Up};
-use anyhow::Context;
 use clap::{ArgGroup, Args};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -255,21 +253,14 @@ pub fn run(args: FitArgs) -> anyhow::Result<()> {
         fit: fitted.report,
         wall_seconds: start.elapsed().as_secs_f64(),
     };
-    if let Some(r) = &args.report {
-        let all = [src.path.as_path(), args.output.as_path()];
-        write_report(r, &report, &all).with_context(|| {
-            format!(
-                "the form was written to {}, the report was not",
-                args.output.display()
-            )
-        })?;
-    }
-    if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
-    } else {
-        print_summary(&report, &args.output);
-    }
-    Ok(())
+    super::finish(
+        &report,
+        args.report.as_deref(),
+        &inputs,
+        &args.output,
+        args.json,
+        |r| print_summary(r, &args.output),
+    )
 }
 
 fn print_summary(r: &FitCliReport, out: &Path) {

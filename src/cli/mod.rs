@@ -115,3 +115,28 @@ pub fn write_report<T: serde::Serialize>(
     })?;
     Ok(())
 }
+
+/// The end of every job: the report file (if asked for, never over an input or the output),
+/// then the JSON report or the human summary on stdout.
+pub fn finish<T: serde::Serialize>(
+    report: &T,
+    report_path: Option<&std::path::Path>,
+    inputs: &[&std::path::Path],
+    output: &std::path::Path,
+    json: bool,
+    summary: impl FnOnce(&T),
+) -> anyhow::Result<()> {
+    use anyhow::Context;
+    if let Some(r) = report_path {
+        let mut all = inputs.to_vec();
+        all.push(output);
+        write_report(r, report, &all)
+            .with_context(|| format!("{} was written, the report was not", output.display()))?;
+    }
+    if json {
+        println!("{}", serde_json::to_string_pretty(report)?);
+    } else {
+        summary(report);
+    }
+    Ok(())
+}
