@@ -4,7 +4,11 @@
 //! meshes ([`io`], [`mesh`]); fit mannequins; drape cloth. `src/main.rs` only calls [`cli::main`].
 
 pub mod cli;
+pub mod cloth;
+pub mod collide;
 pub mod fit;
 pub mod io;
 pub mod math;
 pub mod mesh;
+pub mod scene;
+pub mod sim;

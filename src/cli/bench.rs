@@ -18,6 +18,8 @@ pub enum BenchCommand {
     Convert(ConvertBench),
     /// Fit an analytic surface: error and time against nodes for each Lanczos order; fit speed.
     Fit(FitBench),
+    /// The paper's collision-grid table on a torso, and integrator accuracy against step size.
+    Drape(super::bench_drape::DrapeBench),
 }
 
 /// Arguments of `drapekit bench fit`.
@@ -60,6 +62,7 @@ pub fn run(cmd: BenchCommand) -> anyhow::Result<()> {
     match cmd {
         BenchCommand::Convert(a) => bench_convert(a),
         BenchCommand::Fit(a) => super::bench_fit::run(a),
+        BenchCommand::Drape(a) => super::bench_drape::run(a),
     }
 }
 

@@ -3,8 +3,10 @@
 //! usage errors, from clap).
 
 mod bench;
+mod bench_drape;
 mod bench_fit;
 mod convert;
+mod drape;
 mod fit;
 mod inspect;
 
@@ -15,6 +17,7 @@ use std::io::IsTerminal;
 use std::process::ExitCode;
 
 pub use bench::SplitMix;
+pub use bench_drape::probe as bench_drape_probe;
 pub use convert::ConvertReport;
 
 /// drapekit: clean meshes from CAD exports, fitted mannequins, quick cloth drapes.
@@ -37,6 +40,8 @@ pub enum Command {
     Inspect(inspect::InspectArgs),
     /// Fit a mannequin (dress form) from sections, measurements or a scanned body.
     Fit(fit::FitArgs),
+    /// Drape cloth on objects: the particle simulator with the paper's collision grid.
+    Drape(drape::DrapeArgs),
     /// Benchmarks (speed against a baseline in the same run).
     #[command(subcommand)]
     Bench(bench::BenchCommand),
@@ -84,6 +89,7 @@ pub fn main() -> ExitCode {
         Command::Convert(a) => convert::run(a),
         Command::Inspect(a) => inspect::run(a),
         Command::Fit(a) => fit::run(a),
+        Command::Drape(a) => drape::run(a),
         Command::Bench(b) => bench::run(b),
     };
     match result {

@@ -238,6 +238,11 @@ pub fn tessellate_rings(
 }
 
 /// Closes a ring (counter-clockwise seen from above): upward for the top, downward for the bottom.
+///
+/// A ring that is star-shaped about its centroid gets concentric rings shrunk towards the
+/// centroid (as many as the cap's mean radius over twice the ring's mean edge, 1 to 8) and a
+/// small fan in the middle, so its triangles are about as large as the surface's; other rings
+/// are ear-clipped.
 fn cap(positions: &mut Vec<Point3>, faces: &mut Vec<[u32; 3]>, ring: &[u32], top: bool) {
     let n = ring.len();
     let c = ring.iter().fold(Point3::origin().coords, |s, &i| {
@@ -250,14 +255,7 @@ fn cap(positions: &mut Vec<Point3>, faces: &mut Vec<[u32; 3]>, ring: &[u32], top
         );
         (a.x - c.x) * (b.y - c.y) - (a.y - c.y) * (b.x - c.x) > 0.0
     });
-    if star {
-        positions.push(Point3::from(c));
-        let ci = (positions.len() - 1) as u32;
-        for l in 0..n {
-            let (a, b) = (ring[l], ring[(l + 1) % n]);
-            faces.push(if top { [ci, a, b] } else { [ci, b, a] });
-        }
-    } else {
+    if !star {
         let order: Vec<u32> = if top {
             ring.to_vec()
         } else {
@@ -270,6 +268,45 @@ fn cap(positions: &mut Vec<Point3>, faces: &mut Vec<[u32; 3]>, ring: &[u32], top
             faces,
             &mut PolygonStats::default(),
         );
+        return;
+    }
+    let radius = ring
+        .iter()
+        .map(|&i| (positions[i as usize].coords - c).norm())
+        .sum::<f64>()
+        / n as f64;
+    let edge = (0..n)
+        .map(|l| (positions[ring[(l + 1) % n] as usize] - positions[ring[l] as usize]).norm())
+        .sum::<f64>()
+        / n as f64;
+    let rings = ((radius / (2.0 * edge)).round() as usize).clamp(1, 8);
+    let mut outer: Vec<u32> = ring.to_vec();
+    for k in 1..rings {
+        let s = 1.0 - k as f64 / rings as f64;
+        let inner: Vec<u32> = ring
+            .iter()
+            .map(|&i| {
+                positions.push(Point3::from(c + (positions[i as usize].coords - c) * s));
+                (positions.len() - 1) as u32
+            })
+            .collect();
+        for l in 0..n {
+            let (a, b, cc, d) = (outer[l], outer[(l + 1) % n], inner[(l + 1) % n], inner[l]);
+            if top {
+                faces.push([a, b, cc]);
+                faces.push([cc, d, a]);
+            } else {
+                faces.push([a, cc, b]);
+                faces.push([cc, a, d]);
+            }
+        }
+        outer = inner;
+    }
+    positions.push(Point3::from(c));
+    let ci = (positions.len() - 1) as u32;
+    for l in 0..n {
+        let (a, b) = (outer[l], outer[(l + 1) % n]);
+        faces.push(if top { [ci, a, b] } else { [ci, b, a] });
     }
 }
 

@@ -6,7 +6,7 @@
 //! test is the Voronoi-region method of Ericson, *Real-Time Collision Detection*, 5.1.5.
 
 use super::TriMesh;
-use crate::math::{Aabb, Point3, Vec3};
+use crate::math::{Aabb, Point3};
 
 /// The closest point of triangle (a, b, c) to p.
 pub fn closest_on_triangle(p: &Point3, a: &Point3, b: &Point3, c: &Point3) -> Point3 {
@@ -137,37 +137,33 @@ impl<'a> ClosestPoints<'a> {
     }
 
     /// The closest point of the mesh to `p`.
+    ///
+    /// The search starts at the cell nearest `p` (its projection on the grid's box when `p` is
+    /// outside: no point of the box is nearer `p` than to that projection) and visits shells of
+    /// cells around it until the next shell is farther than the best distance found.
     pub fn closest(&self, p: &Point3) -> Hit {
         let dims = self.dims;
-        let home: [i64; 3] =
-            [0, 1, 2].map(|k| ((p[k] - self.bbox.min[k]) / self.cell).floor() as i64);
-        // Distance from p to the grid box, so far-away queries start at the right shell.
-        let outside = {
-            let mut d = Vec3::zeros();
-            for k in 0..3 {
-                d[k] = (self.bbox.min[k] - p[k])
-                    .max(0.0)
-                    .max(p[k] - self.bbox.max[k]);
-            }
-            d.norm()
-        };
+        let clamped = Point3::new(
+            p.x.clamp(self.bbox.min.x, self.bbox.max.x),
+            p.y.clamp(self.bbox.min.y, self.bbox.max.y),
+            p.z.clamp(self.bbox.min.z, self.bbox.max.z),
+        );
+        let outside = (p - clamped).norm();
+        let home: [i64; 3] = [0, 1, 2].map(|k| {
+            (((clamped[k] - self.bbox.min[k]) / self.cell).floor() as i64)
+                .clamp(0, dims[k] as i64 - 1)
+        });
         let mut best = Hit {
             distance: f64::INFINITY,
             point: *p,
             face: usize::MAX,
         };
-        let max_shell = dims.iter().copied().max().unwrap_or(1) as i64
-            + home.iter().map(|h| h.abs()).max().unwrap_or(0);
-        let mut seen_any = false;
+        let max_shell = dims.iter().copied().max().unwrap_or(1) as i64;
         for shell in 0..=max_shell {
-            // Every point of shell s is at least (s - 1) cells away from p.
-            let reach = (shell as f64 - 1.0).max(0.0) * self.cell;
-            if seen_any && reach > best.distance {
+            // Cells of shell s are at least (s - 1) cells from the projection, hence from p.
+            let reach = ((shell as f64 - 1.0).max(0.0) * self.cell).max(outside);
+            if reach > best.distance {
                 break;
-            }
-            // No cell of this shell can be in the grid while all of it is nearer than the grid.
-            if (shell as f64 + 1.0) * self.cell * 3f64.sqrt() < outside {
-                continue;
             }
             let s = shell;
             for dk in -s..=s {
@@ -186,7 +182,6 @@ impl<'a> ClosestPoints<'a> {
                         {
                             continue;
                         }
-                        seen_any = true;
                         let c = i as usize + dims[0] * (j as usize + dims[1] * k as usize);
                         for &f in &self.faces[self.start[c] as usize..self.start[c + 1] as usize] {
                             let [a, b, cc] = self.mesh.corners(f as usize);

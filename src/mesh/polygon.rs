@@ -203,6 +203,88 @@ pub fn triangulate(
     stats.triangles += out.len() - before;
 }
 
+/// Triangulates a polygon with holes in the plane z = const: `outer` counter-clockwise, each
+/// hole clockwise, all as indices into `positions`. Each hole is joined to the rest by a bridge
+/// (a pair of coincident edges) from its rightmost corner to the nearest corner it can see, and
+/// the bridged ring is ear-clipped. Returns triangles that keep the outer ring's winding.
+pub fn triangulate_with_holes(
+    positions: &[Point3],
+    outer: &[u32],
+    holes: &[Vec<u32>],
+) -> Vec<[u32; 3]> {
+    let mut ring: Vec<u32> = outer.to_vec();
+    let mut holes: Vec<&Vec<u32>> = holes.iter().filter(|h| h.len() >= 3).collect();
+    // Rightmost holes first, so later bridges can pass by earlier ones.
+    let right = |h: &Vec<u32>| {
+        h.iter()
+            .map(|&i| positions[i as usize].x)
+            .fold(f64::NEG_INFINITY, f64::max)
+    };
+    holes.sort_by(|a, b| right(b).total_cmp(&right(a)));
+    for (hi, hole) in holes.iter().enumerate() {
+        let m = (0..hole.len())
+            .max_by(|&a, &b| {
+                positions[hole[a] as usize]
+                    .x
+                    .total_cmp(&positions[hole[b] as usize].x)
+            })
+            .unwrap();
+        let pm = positions[hole[m] as usize];
+        // Every edge a bridge must not cross: the ring so far and the holes not yet joined.
+        let mut edges: Vec<(Point3, Point3)> = (0..ring.len())
+            .map(|i| {
+                (
+                    positions[ring[i] as usize],
+                    positions[ring[(i + 1) % ring.len()] as usize],
+                )
+            })
+            .collect();
+        for h in holes.iter().skip(hi) {
+            edges.extend((0..h.len()).map(|i| {
+                (
+                    positions[h[i] as usize],
+                    positions[h[(i + 1) % h.len()] as usize],
+                )
+            }));
+        }
+        let mut order: Vec<usize> = (0..ring.len()).collect();
+        order.sort_by(|&a, &b| {
+            (positions[ring[a] as usize] - pm)
+                .norm_squared()
+                .total_cmp(&(positions[ring[b] as usize] - pm).norm_squared())
+        });
+        let visible = |k: usize| {
+            let pv = positions[ring[k] as usize];
+            let (a, b) = (Point2::new(pm.x, pm.y), Point2::new(pv.x, pv.y));
+            edges.iter().all(|(e0, e1)| {
+                let (c, d) = (Point2::new(e0.x, e0.y), Point2::new(e1.x, e1.y));
+                c == a || c == b || d == a || d == b || !segments_cross(&a, &b, &c, &d)
+            })
+        };
+        let k = order
+            .iter()
+            .copied()
+            .find(|&k| visible(k))
+            .unwrap_or(order[0]);
+        // ring[..=k], hole from m around back to m, ring[k..].
+        let mut joined = Vec::with_capacity(ring.len() + hole.len() + 2);
+        joined.extend_from_slice(&ring[..=k]);
+        for j in 0..=hole.len() {
+            joined.push(hole[(m + j) % hole.len()]);
+        }
+        joined.extend_from_slice(&ring[k..]);
+        ring = joined;
+    }
+    let mut out = Vec::with_capacity(ring.len());
+    let mut stats = PolygonStats::default();
+    if ring.len() == 3 {
+        out.push([ring[0], ring[1], ring[2]]);
+    } else {
+        ear_clip(positions, &ring, &mut out, &mut stats);
+    }
+    out
+}
+
 /// The smallest period `p < n` with `ring[i] == ring[i % p]`, if the ring repeats itself.
 fn smallest_period(ring: &[u32]) -> Option<usize> {
     let n = ring.len();
@@ -634,6 +716,22 @@ mod tests {
             let [a, b, c] = tri.map(|i| p[i as usize]);
             assert!((b - a).cross(&(c - a)).z > 0.1, "flat or flipped: {tri:?}");
         }
+    }
+
+    #[test]
+    fn polygon_with_two_holes() {
+        // A 10 x 4 rectangle with two 2 x 2 square holes.
+        let mut xy = vec![(0.0, 0.0), (10.0, 0.0), (10.0, 4.0), (0.0, 4.0)];
+        xy.extend([(1.0, 1.0), (1.0, 3.0), (3.0, 3.0), (3.0, 1.0)]);
+        xy.extend([(6.0, 1.0), (6.0, 3.0), (8.0, 3.0), (8.0, 1.0)]);
+        let p = pts2(&xy);
+        let t = triangulate_with_holes(&p, &[0, 1, 2, 3], &[vec![4, 5, 6, 7], vec![8, 9, 10, 11]]);
+        let (signed, abs) = areas(&p, &t);
+        assert!(
+            (signed - 32.0).abs() < 1e-12 && (abs - 32.0).abs() < 1e-12,
+            "{signed} {abs}"
+        );
+        assert_eq!(t.len(), 12 + 2 * 2 - 2, "V + 2H - 2 triangles");
     }
 
     #[test]

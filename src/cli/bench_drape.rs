@@ -1,0 +1,401 @@
+//! `drapekit bench drape`: the paper's timing table on its scene class, and integrator accuracy
+//! against step size.
+//!
+//! **Scene** (`method.md` s. 4, the first paper's table). A torso of 4,800 faces, fitted from
+//! the GarmentCode mean female body (`fit`: 40 slices between 0.48 and 0.74 of the height,
+//! tessellated 60 around x 40 rings, capped), and a square of cloth of about 4,850 particles
+//! (spacing 1 cm), its centre 3 mm above the centre of the torso's top. 1000 iterations of
+//! leapfrog at half the estimated largest stable step, for each cell grid of the paper's table;
+//! the collision and total seconds are medians of `--runs` runs, printed beside the paper's (an
+//! i7-4770, one thread, 2017). The final state with 1 thread and with 2 is compared bit for bit.
+//!
+//! **Integrators.** A 30 cm square pinned at two corners swings for 0.1 s; each integrator and
+//! step is compared with a leapfrog run at a step 16 times smaller than the smallest tried
+//! (largest particle distance at the end), with its wall time. Unstable runs are reported as such.
+
+use crate::cloth::fabric::Fabric;
+use crate::cloth::model::ClothModel;
+use crate::cloth::pattern;
+use crate::cloth::Integrator;
+use crate::collide::Collider;
+use crate::fit::fitter::{fit_sections, FitOptions};
+use crate::fit::scan::{torso_sections, ScanOptions};
+use crate::io::{read_mesh, ReadOptions};
+use crate::math::{Point2, Point3, Vec3};
+use crate::mesh::prepare::{prepare, PrepareOptions};
+use crate::mesh::transform::{change_up, Up};
+use crate::mesh::TriMesh;
+use crate::scene::Stop;
+use crate::sim::{self, World};
+use anyhow::{ensure, Context};
+use serde::Serialize;
+use std::path::PathBuf;
+
+/// Arguments of `drapekit bench drape`.
+#[derive(Debug, clap::Args)]
+pub struct DrapeBench {
+    /// The body the torso is fitted from (Y-up, metres).
+    #[arg(long, value_name = "MESH")]
+    pub body: Option<PathBuf>,
+    /// Timed runs of each configuration (the median is reported).
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
+    pub runs: u32,
+    /// Iterations per run.
+    #[arg(long, default_value_t = 1000)]
+    pub steps: u64,
+    /// Skip the slowest grid (1 x 1 x 1), which takes minutes at this scale.
+    #[arg(long)]
+    pub skip_one_cell: bool,
+    /// Print the results as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// The paper's table: cells, collision seconds, total seconds.
+const PAPER: [([usize; 3], f64, f64); 5] = [
+    ([1, 1, 1], 612.28, 618.07),
+    ([5, 5, 5], 12.78, 18.58),
+    ([15, 23, 7], 3.44, 9.29),
+    ([50, 70, 30], 1.10, 6.93),
+    ([100, 250, 50], 1.25, 7.07),
+];
+
+/// The bench fabric: cotton with a softer tensile stiffness (as the validation scenes).
+pub fn bench_fabric() -> Fabric {
+    Fabric {
+        stretch: [1000.0, 1000.0],
+        damping: 3.0,
+        thickness: 0.002,
+        ..Fabric::cotton()
+    }
+}
+
+/// The 4,800-face torso of the bench, Z-up, metres.
+pub fn bench_torso(body: &std::path::Path) -> anyhow::Result<TriMesh> {
+    let mut m = read_mesh(body, &ReadOptions::default())
+        .with_context(|| format!("the bench needs the body {}", body.display()))?
+        .mesh;
+    prepare(&mut m, &PrepareOptions::default());
+    change_up(&mut m, Up::Y, Up::Z);
+    let (sections, _) = torso_sections(
+        &m,
+        &ScanOptions {
+            levels: 32,
+            from: None,
+            to: None,
+        },
+    )?;
+    let f = fit_sections(
+        sections,
+        &[],
+        &FitOptions {
+            nodes_around: 64,
+            along: 32,
+            around: 60,
+            ..FitOptions::default()
+        },
+    )?;
+    Ok(f.mesh)
+}
+
+/// The bench world: the torso and a square of about `particles` particles above its top.
+fn bench_world(torso: &TriMesh, cells: [usize; 3]) -> (World, f64) {
+    let fabric = bench_fabric();
+    let b = torso.bbox().unwrap();
+    let side = 0.675;
+    let outline = [
+        (-side / 2.0, -side / 2.0),
+        (side / 2.0, -side / 2.0),
+        (side / 2.0, side / 2.0),
+        (-side / 2.0, side / 2.0),
+    ]
+    .map(|(x, y)| Point2::new(x, y));
+    let piece = pattern::build(&outline, 0.01, &fabric, &[]).expect("a square");
+    let c = b.center();
+    let placed: Vec<Point3> = piece
+        .flat
+        .iter()
+        .map(|q| Point3::new(c.x + q.x, c.y + q.y, b.max.z + 0.003))
+        .collect();
+    let (model, x) = ClothModel::assemble(
+        &[("cloth".into(), piece, fabric.clone(), placed)],
+        Vec3::new(0.0, 0.0, -9.81),
+    );
+    let collider = Collider::new(
+        "torso".into(),
+        torso.clone(),
+        cells,
+        fabric.thickness,
+        Some(0.3),
+    );
+    let w = World::new(model, x, vec![collider], Integrator::Leapfrog);
+    let dt = 0.5 * w.stable_step;
+    (w, dt)
+}
+
+#[derive(Debug, Serialize)]
+struct Row {
+    cells: [usize; 3],
+    collision_seconds: f64,
+    total_seconds: f64,
+    paper_collision_seconds: f64,
+    paper_total_seconds: f64,
+    contacts_end: usize,
+}
+
+#[derive(Debug, Serialize)]
+struct IntegratorRow {
+    integrator: Integrator,
+    dt: f64,
+    error: Option<f64>,
+    wall_seconds: f64,
+    stable_step_estimate: f64,
+}
+
+#[derive(Debug, Serialize)]
+struct Report {
+    particles: usize,
+    faces: usize,
+    steps: u64,
+    dt: f64,
+    rows: Vec<Row>,
+    threads_identical: bool,
+    integrators: Vec<IntegratorRow>,
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// Runs the benchmark.
+pub fn run(a: DrapeBench) -> anyhow::Result<()> {
+    let body = a.body.clone().unwrap_or_else(|| {
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/realdata/bodies/mean_female.obj")
+    });
+    let torso = bench_torso(&body)?;
+    let (probe, dt) = bench_world(&torso, [1, 1, 1]);
+    let say = |s: String| {
+        if !a.json {
+            println!("{s}");
+        }
+    };
+    say(format!(
+        "bench drape: {} particles falling on a torso of {} faces, {} iterations of leapfrog, dt = {:.2e} s (half the estimated stable step)",
+        probe.model.len(),
+        torso.faces.len(),
+        a.steps,
+        dt
+    ));
+    say("  cells           collision s   total s   | paper collision s   total s   | contacts at the end".into());
+    let mut rows = Vec::new();
+    let mut finals: Vec<Vec<Point3>> = Vec::new();
+    for (cells, pc, pt) in PAPER {
+        if cells == [1, 1, 1] && a.skip_one_cell {
+            continue;
+        }
+        let mut col = Vec::new();
+        let mut tot = Vec::new();
+        let mut contacts = 0;
+        for _ in 0..a.runs {
+            let (mut w, dt) = bench_world(&torso, cells);
+            let st = sim::run(
+                &mut w,
+                Integrator::Leapfrog,
+                dt,
+                Stop::Steps(a.steps),
+                None,
+                &mut |_, _| Ok(()),
+                &|_| {},
+            )?;
+            col.push(st.collision_seconds);
+            tot.push(st.wall_seconds);
+            contacts = w.state.contact.iter().filter(|c| c.is_some()).count();
+            finals.push(w.state.x.clone());
+        }
+        let row = Row {
+            cells,
+            collision_seconds: median(col),
+            total_seconds: median(tot),
+            paper_collision_seconds: pc,
+            paper_total_seconds: pt,
+            contacts_end: contacts,
+        };
+        say(format!(
+            "  {:<14}  {:>11.4}  {:>8.4}   | {:>17.2}  {:>8.2}   | {}",
+            format!("{}x{}x{}", cells[0], cells[1], cells[2]),
+            row.collision_seconds,
+            row.total_seconds,
+            pc,
+            pt,
+            contacts
+        ));
+        rows.push(row);
+    }
+    ensure!(
+        finals.windows(2).all(|w| w[0] == w[1]),
+        "the grids gave different drapes: collision must not depend on the cells"
+    );
+    // One thread against two, bit for bit.
+    let mut by_threads = Vec::new();
+    for threads in [1, 2] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()?;
+        let x = pool.install(|| {
+            let (mut w, dt) = bench_world(&torso, [50, 70, 30]);
+            sim::run(
+                &mut w,
+                Integrator::Leapfrog,
+                dt,
+                Stop::Steps(a.steps),
+                None,
+                &mut |_, _| Ok(()),
+                &|_| {},
+            )
+            .map(|_| w.state.x)
+        })?;
+        by_threads.push(x);
+    }
+    let identical = by_threads[0] == by_threads[1];
+    say(format!("  final positions with 1 and 2 threads identical: {identical}; the same for every grid: true"));
+    let integrators = integrator_table(&a, &say)?;
+    if a.json {
+        let rep = Report {
+            particles: probe.model.len(),
+            faces: torso.faces.len(),
+            steps: a.steps,
+            dt,
+            rows,
+            threads_identical: identical,
+            integrators,
+        };
+        println!("{}", serde_json::to_string_pretty(&rep)?);
+    }
+    Ok(())
+}
+
+fn hanging_world(integrator: Integrator) -> World {
+    let fabric = Fabric {
+        damping: 3.0,
+        ..bench_fabric()
+    };
+    let s = 0.15;
+    let outline = [(-s, -s), (s, -s), (s, s), (-s, s)].map(|(x, y)| Point2::new(x, y));
+    let piece = pattern::build(
+        &outline,
+        0.02,
+        &fabric,
+        &[Point2::new(-s, s), Point2::new(s, s)],
+    )
+    .expect("a square");
+    let placed: Vec<Point3> = piece
+        .flat
+        .iter()
+        .map(|q| Point3::new(q.x, 0.0, q.y))
+        .collect();
+    let (model, x) = ClothModel::assemble(
+        &[("hang".into(), piece, fabric, placed)],
+        Vec3::new(0.0, 0.0, -9.81),
+    );
+    World::new(model, x, Vec::new(), integrator)
+}
+
+fn integrator_table(a: &DrapeBench, say: &dyn Fn(String)) -> anyhow::Result<Vec<IntegratorRow>> {
+    let duration = 0.1;
+    let steps = [2e-6, 5e-6, 1e-5, 2e-5, 5e-5, 1e-4];
+    let dt_ref = steps[0] / 16.0;
+    let mut reference = hanging_world(Integrator::Leapfrog);
+    sim::run(
+        &mut reference,
+        Integrator::Leapfrog,
+        dt_ref,
+        Stop::Steps((duration / dt_ref).round() as u64),
+        None,
+        &mut |_, _| Ok(()),
+        &|_| {},
+    )?;
+    say(format!("  integrators: a 30 cm square pinned at two corners, {duration} s, against leapfrog at dt = {dt_ref:.1e} s"));
+    say("  integrator       dt         error m      wall s   (stable step estimate)".into());
+    let mut rows = Vec::new();
+    for integrator in [Integrator::ExplicitEuler, Integrator::Leapfrog] {
+        for &dt in &steps {
+            let mut times = Vec::new();
+            let mut error = None;
+            let mut estimate = 0.0;
+            for _ in 0..a.runs {
+                let mut w = hanging_world(integrator);
+                estimate = w.stable_step;
+                let r = sim::run(
+                    &mut w,
+                    integrator,
+                    dt,
+                    Stop::Steps((duration / dt).round() as u64),
+                    None,
+                    &mut |_, _| Ok(()),
+                    &|_| {},
+                );
+                match r {
+                    Ok(st) => {
+                        times.push(st.wall_seconds);
+                        error = Some(
+                            w.state
+                                .x
+                                .iter()
+                                .zip(&reference.state.x)
+                                .map(|(p, q)| (p - q).norm())
+                                .fold(0.0, f64::max),
+                        );
+                    }
+                    Err(_) => {
+                        error = None;
+                        times.push(f64::NAN);
+                        break;
+                    }
+                }
+            }
+            let wall = median(times);
+            say(format!(
+                "  {:<15} {:>8.1e}   {:>10}   {:>8}   ({:.2e})",
+                integrator.to_string(),
+                dt,
+                error.map_or("unstable".into(), |e| format!("{e:.3e}")),
+                if wall.is_nan() {
+                    "-".into()
+                } else {
+                    format!("{wall:.4}")
+                },
+                estimate
+            ));
+            rows.push(IntegratorRow {
+                integrator,
+                dt,
+                error,
+                wall_seconds: wall,
+                stable_step_estimate: estimate,
+            });
+        }
+    }
+    Ok(rows)
+}
+
+/// Runs the bench scene once with the given cells: (collision s, total s, contacts).
+pub fn probe(body: &std::path::Path, cells: [usize; 3], steps: u64) -> (f64, f64, usize) {
+    let torso = bench_torso(body).expect("the body");
+    let (mut w, dt) = bench_world(&torso, cells);
+    let st = sim::run(
+        &mut w,
+        Integrator::Leapfrog,
+        dt,
+        Stop::Steps(steps),
+        None,
+        &mut |_, _| Ok(()),
+        &|_| {},
+    )
+    .expect("stable");
+    (
+        st.collision_seconds,
+        st.wall_seconds,
+        w.state.contact.iter().filter(|c| c.is_some()).count(),
+    )
+}

@@ -1,0 +1,332 @@
+//! `drapekit drape SCENE.toml -o OUT_DIR`: a validation drape.
+
+use crate::io::{self, WriteOptions};
+use crate::mesh::transform::Units;
+use crate::mesh::TriMesh;
+use crate::scene;
+use crate::sim::{self, World};
+use clap::Args;
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+
+/// Arguments of `drapekit drape`.
+#[derive(Debug, Args)]
+pub struct DrapeArgs {
+    /// The scene file (TOML; see the README).
+    pub scene: PathBuf,
+    /// The output directory (created if needed): one OBJ per piece, frames/ on request.
+    #[arg(short, long, value_name = "OUT_DIR")]
+    pub output: PathBuf,
+    /// Write the JSON report here.
+    #[arg(long, value_name = "R.json")]
+    pub report: Option<PathBuf>,
+    /// Print the JSON report instead of the summary.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// One object in the report.
+#[derive(Debug, Serialize)]
+pub struct ObjectReport {
+    /// Name.
+    pub name: String,
+    /// Faces after preparation.
+    pub faces: usize,
+    /// Grid cells along x, y, z.
+    pub cells: [usize; 3],
+    /// Step the grid was first needed (`null`: the cloth never came near).
+    pub grid_built_at: Option<u64>,
+    /// Watertight (inside tests apply).
+    pub closed: bool,
+    /// Particles inside it at the end (`null` for open objects).
+    pub particles_inside: Option<usize>,
+    /// Smallest particle distance to it at the end (length units).
+    pub min_clearance: f64,
+}
+
+/// One piece in the report.
+#[derive(Debug, Serialize)]
+pub struct PieceReport {
+    /// Name.
+    pub name: String,
+    /// Its fabric.
+    pub fabric: String,
+    /// Particles.
+    pub particles: usize,
+    /// Triangles.
+    pub triangles: usize,
+    /// Flat area (length units squared).
+    pub area: f64,
+    /// Drape coefficient (with `[report] disc_radius`).
+    pub drape_coefficient: Option<f64>,
+    /// Output files.
+    pub files: Vec<String>,
+}
+
+/// The JSON report of `drape`. Lengths are in the scene's units.
+#[derive(Debug, Serialize)]
+pub struct DrapeReport {
+    /// The scene file.
+    pub scene: String,
+    /// The output directory.
+    pub output_dir: String,
+    /// Units of every length here.
+    pub units: Units,
+    /// Particles.
+    pub particles: usize,
+    /// Springs.
+    pub springs: usize,
+    /// Of which stretch, shear, bend.
+    pub springs_by_kind: [usize; 3],
+    /// Faces of all objects.
+    pub object_faces: usize,
+    /// Grid cells of each object.
+    pub cells: Vec<[usize; 3]>,
+    /// Integrator.
+    pub integrator: crate::cloth::Integrator,
+    /// Time step, s.
+    pub dt: f64,
+    /// Steps taken.
+    pub steps: u64,
+    /// Simulated time, s.
+    pub time: f64,
+    /// Whether the run stopped at rest (`until_rest`).
+    pub at_rest: bool,
+    /// Wall time of the stepping loop, s.
+    pub wall_seconds: f64,
+    /// Of which collision, s.
+    pub collision_seconds: f64,
+    /// Particles in contact with an object at the end.
+    pub contacts_end: usize,
+    /// Particles inside closed objects at the end.
+    pub particles_inside: usize,
+    /// Smallest particle distance to any object at the end.
+    pub min_clearance: Option<f64>,
+    /// Largest strain (edge length over rest length, minus one).
+    pub max_strain: f64,
+    /// Mean strain.
+    pub mean_strain: f64,
+    /// Kinetic energy at the end, J.
+    pub kinetic_energy_end: f64,
+    /// Every number finite.
+    pub finite: bool,
+    /// Highest eigenfrequency of the springs at rest, rad/s.
+    pub max_frequency: f64,
+    /// Largest stable step estimated for this integrator, s.
+    pub stable_step_estimate: f64,
+    /// Per object.
+    pub objects: Vec<ObjectReport>,
+    /// Per piece.
+    pub pieces: Vec<PieceReport>,
+    /// Wall time of the whole command, s.
+    pub command_seconds: f64,
+}
+
+fn piece_mesh(world: &World, piece: usize, to_units: f64) -> TriMesh {
+    let r = &world.model.pieces[piece];
+    let positions = world.state.x[r.first..r.first + r.count]
+        .iter()
+        .map(|p| p * to_units)
+        .collect();
+    let faces = world.model.triangles[r.first_triangle..r.first_triangle + r.triangles]
+        .iter()
+        .map(|t| t.map(|v| v - r.first as u32))
+        .collect();
+    TriMesh::new(positions, faces)
+}
+
+/// Runs `drapekit drape`.
+pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
+    let start = std::time::Instant::now();
+    let sc = scene::read(&args.scene)?;
+    let mut world = sim::load(&sc)?;
+    let out = &args.output;
+    if out.is_file() {
+        anyhow::bail!(
+            "{} is a file: the output must be a directory",
+            out.display()
+        );
+    }
+    std::fs::create_dir_all(out)
+        .map_err(|e| anyhow::anyhow!("cannot create {}: {e}", out.display()))?;
+    let to_units = crate::mesh::transform::Units::factor(Units::M, sc.units);
+    let inputs: Vec<&Path> = std::iter::once(sc.path.as_path())
+        .chain(sc.objects.iter().map(|o| o.mesh.as_path()))
+        .collect();
+    let total = match sc.stop {
+        scene::Stop::Steps(n) => n,
+        scene::Stop::UntilRest { max_steps, .. } => max_steps,
+    };
+    let bar = super::interactive().then(|| {
+        let b = indicatif::ProgressBar::new(total);
+        b.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{bar:40} {pos}/{len} steps, {per_sec}, {eta} left",
+            )
+            .unwrap(),
+        );
+        b
+    });
+    let frames_dir = out.join("frames");
+    let names: Vec<String> = sc.pieces.iter().map(|p| p.name.clone()).collect();
+    let mut frame = |step: u64, w: &World| -> Result<(), sim::SimError> {
+        std::fs::create_dir_all(&frames_dir).map_err(|e| sim::SimError::Frame {
+            step,
+            message: e.to_string(),
+        })?;
+        for (i, name) in names.iter().enumerate() {
+            let p = frames_dir.join(format!("{name}_{step:07}.obj"));
+            io::write_mesh(
+                &p,
+                &piece_mesh(w, i, to_units),
+                &WriteOptions::default(),
+                &inputs,
+            )
+            .map_err(|e| sim::SimError::Frame {
+                step,
+                message: e.to_string(),
+            })?;
+        }
+        Ok(())
+    };
+    let progress = |step: u64| {
+        if let Some(b) = &bar {
+            b.set_position(step);
+        }
+    };
+    let stats = sim::run(
+        &mut world,
+        sc.integrator,
+        sc.dt,
+        sc.stop,
+        sc.frames,
+        &mut frame,
+        &progress,
+    );
+    if let Some(b) = &bar {
+        b.finish_and_clear();
+    }
+    let stats = stats?;
+    let mut pieces = Vec::new();
+    for (i, p) in sc.pieces.iter().enumerate() {
+        let mesh = piece_mesh(&world, i, to_units);
+        let mut files = Vec::new();
+        for ext in if sc.ply {
+            vec!["obj", "ply"]
+        } else {
+            vec!["obj"]
+        } {
+            let path = out.join(format!("{}.{ext}", p.name));
+            io::write_mesh(&path, &mesh, &WriteOptions::default(), &inputs)?;
+            files.push(path.display().to_string());
+        }
+        let r = &world.model.pieces[i];
+        pieces.push(PieceReport {
+            name: p.name.clone(),
+            fabric: p.fabric_name.clone(),
+            particles: r.count,
+            triangles: r.triangles,
+            area: r.area * to_units * to_units,
+            drape_coefficient: sc.disc_radius.map(|d| sim::drape_coefficient(&world, i, d)),
+            files,
+        });
+    }
+    let inside = sim::particles_inside(&world);
+    let clearance = sim::min_clearance(&world);
+    let objects: Vec<ObjectReport> = world
+        .colliders
+        .iter()
+        .enumerate()
+        .map(|(i, c)| ObjectReport {
+            name: c.name.clone(),
+            faces: c.mesh.faces.len(),
+            cells: c.dims,
+            grid_built_at: world.grid_built_at[i],
+            closed: c.closed,
+            particles_inside: inside[i],
+            min_clearance: clearance[i] * to_units,
+        })
+        .collect();
+    let (max_strain, mean_strain) = sim::strain(&world.model, &world.state.x);
+    let m = &world.model;
+    let report = DrapeReport {
+        scene: sc.path.display().to_string(),
+        output_dir: out.display().to_string(),
+        units: sc.units,
+        particles: m.len(),
+        springs: m.springs.len(),
+        springs_by_kind: [
+            crate::cloth::pattern::SpringKind::Stretch,
+            crate::cloth::pattern::SpringKind::Shear,
+            crate::cloth::pattern::SpringKind::Bend,
+        ]
+        .map(|k| m.count(k)),
+        object_faces: world.colliders.iter().map(|c| c.mesh.faces.len()).sum(),
+        cells: world.colliders.iter().map(|c| c.dims).collect(),
+        integrator: sc.integrator,
+        dt: sc.dt,
+        steps: stats.steps,
+        time: stats.time,
+        at_rest: stats.at_rest,
+        wall_seconds: stats.wall_seconds,
+        collision_seconds: stats.collision_seconds,
+        contacts_end: world.state.contact.iter().filter(|c| c.is_some()).count(),
+        particles_inside: inside.iter().flatten().sum(),
+        min_clearance: objects.iter().map(|o| o.min_clearance).reduce(f64::min),
+        max_strain,
+        mean_strain,
+        kinetic_energy_end: crate::cloth::forces::kinetic_energy(m, &world.state.v),
+        finite: world
+            .state
+            .x
+            .iter()
+            .all(|p| p.iter().all(|c| c.is_finite())),
+        max_frequency: world.max_frequency,
+        stable_step_estimate: world.stable_step,
+        objects,
+        pieces,
+        command_seconds: start.elapsed().as_secs_f64(),
+    };
+    let out_path = args.output.clone();
+    super::finish(
+        &report,
+        args.report.as_deref(),
+        &inputs,
+        &out_path,
+        args.json,
+        print_summary,
+    )
+}
+
+fn print_summary(r: &DrapeReport) {
+    println!(
+        "{} -> {}: {} particles, {} springs, {} object faces; {} steps of {} s ({}, {:.3} s simulated{})",
+        r.scene,
+        r.output_dir,
+        r.particles,
+        r.springs,
+        r.object_faces,
+        r.steps,
+        r.dt,
+        r.integrator,
+        r.time,
+        if r.at_rest { ", came to rest" } else { "" }
+    );
+    println!(
+        "  wall {:.3} s, collision {:.3} s; {} particles in contact at the end",
+        r.wall_seconds, r.collision_seconds, r.contacts_end
+    );
+    println!(
+        "  strain max {:.4} mean {:.4}; kinetic energy {:.3e} J; particles inside objects {}; min clearance {}",
+        r.max_strain,
+        r.mean_strain,
+        r.kinetic_energy_end,
+        r.particles_inside,
+        r.min_clearance.map_or("-".into(), |c| format!("{c:.4e}"))
+    );
+    for p in &r.pieces {
+        if let Some(dc) = p.drape_coefficient {
+            println!("  {}: drape coefficient {:.3}", p.name, dc);
+        }
+    }
+}

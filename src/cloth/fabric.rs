@@ -1,0 +1,210 @@
+//! Fabric parameters, their conversion from Kawabata (KES-F) measurements, and named presets.
+//!
+//! A fabric is given in material terms, independent of the particle spacing `h`; the springs of
+//! the paper's model (`method.md` s. 2) get their constants from them:
+//!
+//! * **stretch** `E` (N/m, force per unit width per unit strain), warp and weft: a spring along a
+//!   thread between neighbours carries a strip of width `h` over length `h`, so `k = E`.
+//! * **shear** `G` (N/m per radian): the two diagonal springs of a cell sheared by `g` store
+//!   `k h^2 g^2 / 2`, the continuum's `G g^2 h^2 / 2`, so `k = G`.
+//! * **bend** `B` (N m, bending rigidity per unit width), warp and weft: the paper's bend spring
+//!   over one node is linear in length, so for a fold of angle `t` at the node it stores
+//!   `k h^2 t^4 / 32` where a strip of width `h` stores `B t^2 / 2`. The two agree at the
+//!   reference fold [`BEND_REFERENCE_ANGLE`] (0.5 rad per node) when `k = 16 B / (h t_ref)^2`.
+//!   Below it the spring is softer, above it stiffer; the drape still stiffens with `B`.
+//! * **density** (kg/m^2) gives the particle masses (a third of each incident triangle's area).
+//! * **damping** (1/s) is air damping, the force `-damping * m * v` of the paper's `-c_i r_i'`.
+//! * **thickness** (m): particles are kept this far from object faces.
+//! * **friction** (0..1): the fraction of the tangential force a sliding particle loses.
+//!
+//! KES-F units convert as: `W` mg/cm^2 x 0.01 = kg/m^2; `B` gf cm^2/cm x 9.80665e-5 = N m;
+//! `G` gf/cm/degree x 56.1891 = N/m per radian; tensile stiffness is the secant at the KES load
+//! of 500 gf/cm, `490.3325 / (EMT / 100)` N/m; `T` mm x 1e-3 = m; `MIU` is the friction.
+//!
+//! The presets are **representative** values inside the ranges published for KES-F
+//! measurements of each fabric class (Kawabata, *The Standardization and Analysis of Hand
+//! Evaluation*, 1980; Hu and Chan, *Textile Research Journal* 68(1), 1998, 57-64; Kenkare and
+//! May-Plumlee, *Journal of Textile and Apparel Technology and Management* 4(3), 2005), not the
+//! measurement of one particular cloth. Give your own with a `[fabric.NAME]` table.
+
+use serde::Serialize;
+
+/// The reference fold angle (radians per node) at which bend springs match the continuum.
+pub const BEND_REFERENCE_ANGLE: f64 = 0.5;
+
+/// A fabric (SI units).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Fabric {
+    /// Areal density, kg/m^2.
+    pub density: f64,
+    /// Tensile stiffness along warp and weft, N/m.
+    pub stretch: [f64; 2],
+    /// Shear stiffness, N/m per radian.
+    pub shear: f64,
+    /// Bending rigidity along warp and weft, N m.
+    pub bend: [f64; 2],
+    /// Air damping, 1/s.
+    pub damping: f64,
+    /// Thickness, m.
+    pub thickness: f64,
+    /// Friction against objects, fraction of the tangential force (0..1).
+    pub friction: f64,
+}
+
+/// KES-F measurements of a fabric (Kawabata's units).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Kes {
+    /// Mass per area, mg/cm^2.
+    pub w: f64,
+    /// Bending rigidity warp, weft, gf cm^2/cm.
+    pub b: [f64; 2],
+    /// Shear rigidity, gf/cm/degree.
+    pub g: f64,
+    /// Extensibility at 500 gf/cm warp, weft, %.
+    pub emt: [f64; 2],
+    /// Thickness at 0.5 gf/cm^2, mm.
+    pub t: f64,
+    /// Coefficient of friction.
+    pub miu: f64,
+}
+
+impl Fabric {
+    /// The fabric of KES-F measurements, with air damping `damping` (1/s).
+    ///
+    /// ```
+    /// use drapekit::cloth::fabric::{Fabric, Kes};
+    /// let f = Fabric::from_kes(&Kes { w: 12.0, b: [0.08, 0.06], g: 0.8, emt: [4.0, 5.0], t: 0.3, miu: 0.25 }, 0.5);
+    /// assert!((f.density - 0.12).abs() < 1e-12);
+    /// assert!((f.stretch[0] - 12_258.3125).abs() < 1e-6);
+    /// assert!((f.bend[0] - 7.84532e-6).abs() < 1e-12);
+    /// ```
+    pub fn from_kes(k: &Kes, damping: f64) -> Fabric {
+        Fabric {
+            density: k.w * 0.01,
+            stretch: k.emt.map(|e| 490.332_5 / (e / 100.0)),
+            shear: k.g * 56.189_1,
+            bend: k.b.map(|b| b * 9.806_65e-5),
+            damping,
+            thickness: k.t * 1e-3,
+            friction: k.miu,
+        }
+    }
+
+    /// The named presets and their KES-F values.
+    pub fn presets() -> Vec<(&'static str, Kes)> {
+        vec![
+            (
+                "silk",
+                Kes {
+                    w: 6.0,
+                    b: [0.015, 0.012],
+                    g: 0.35,
+                    emt: [3.5, 4.5],
+                    t: 0.15,
+                    miu: 0.18,
+                },
+            ),
+            (
+                "cotton",
+                Kes {
+                    w: 12.0,
+                    b: [0.08, 0.06],
+                    g: 0.8,
+                    emt: [4.0, 5.0],
+                    t: 0.30,
+                    miu: 0.25,
+                },
+            ),
+            (
+                "wool",
+                Kes {
+                    w: 22.0,
+                    b: [0.11, 0.09],
+                    g: 0.65,
+                    emt: [6.0, 8.0],
+                    t: 0.55,
+                    miu: 0.20,
+                },
+            ),
+            (
+                "polyester",
+                Kes {
+                    w: 10.0,
+                    b: [0.05, 0.05],
+                    g: 0.9,
+                    emt: [3.0, 3.5],
+                    t: 0.25,
+                    miu: 0.22,
+                },
+            ),
+            (
+                "denim",
+                Kes {
+                    w: 40.0,
+                    b: [0.9, 0.6],
+                    g: 3.0,
+                    emt: [2.5, 3.5],
+                    t: 0.9,
+                    miu: 0.30,
+                },
+            ),
+        ]
+    }
+
+    /// A preset by name (air damping 0.5/s), or `None`.
+    pub fn preset(name: &str) -> Option<Fabric> {
+        Fabric::presets()
+            .into_iter()
+            .find(|(n, _)| *n == name)
+            .map(|(_, k)| Fabric::from_kes(&k, 0.5))
+    }
+
+    /// The cotton preset.
+    pub fn cotton() -> Fabric {
+        Fabric::preset("cotton").expect("a preset")
+    }
+
+    /// Spring constant of a stretch spring along direction `(c, s)` (cosine and sine with warp).
+    pub fn stretch_k(&self, c: f64, s: f64) -> f64 {
+        self.stretch[0] * c * c + self.stretch[1] * s * s
+    }
+
+    /// Spring constant of a bend spring over one node of spacing `h`, along `(c, s)`.
+    pub fn bend_k(&self, h: f64, c: f64, s: f64) -> f64 {
+        let b = self.bend[0] * c * c + self.bend[1] * s * s;
+        16.0 * b / (h * BEND_REFERENCE_ANGLE).powi(2)
+    }
+
+    /// Checks every value: the name of the first bad field and why.
+    pub fn check(&self) -> Result<(), (&'static str, String)> {
+        let pos = |name: &'static str, v: f64| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err((name, format!("must be a positive number, got {v}")))
+            }
+        };
+        let nonneg = |name: &'static str, v: f64| {
+            if v.is_finite() && v >= 0.0 {
+                Ok(())
+            } else {
+                Err((name, format!("must be a number >= 0, got {v}")))
+            }
+        };
+        pos("density", self.density)?;
+        pos("stretch", self.stretch[0])?;
+        pos("stretch", self.stretch[1])?;
+        nonneg("shear", self.shear)?;
+        nonneg("bend", self.bend[0])?;
+        nonneg("bend", self.bend[1])?;
+        nonneg("damping", self.damping)?;
+        nonneg("thickness", self.thickness)?;
+        if !(0.0..=1.0).contains(&self.friction) {
+            return Err((
+                "friction",
+                format!("must be within 0..1, got {}", self.friction),
+            ));
+        }
+        Ok(())
+    }
+}

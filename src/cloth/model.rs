@@ -1,0 +1,146 @@
+//! The cloth model: everything that never changes during a run (masses, springs, rest lengths,
+//! pins, triangles, per-particle fabric values), as flat arrays.
+
+use super::fabric::Fabric;
+use super::pattern::{Piece, Spring, SpringKind};
+use crate::math::{Point3, Vec3};
+use serde::Serialize;
+
+/// One piece's place in the model.
+#[derive(Debug, Clone, Serialize)]
+pub struct PieceRange {
+    /// Name.
+    pub name: String,
+    /// First particle.
+    pub first: usize,
+    /// Particles.
+    pub count: usize,
+    /// First triangle.
+    pub first_triangle: usize,
+    /// Triangles.
+    pub triangles: usize,
+    /// Flat area, m^2.
+    pub area: f64,
+}
+
+/// What never changes.
+#[derive(Debug, Clone)]
+pub struct ClothModel {
+    /// Particle masses, kg.
+    pub mass: Vec<f64>,
+    /// 1 / mass, 0 for pinned particles.
+    pub inv_mass: Vec<f64>,
+    /// Air damping rate per particle, 1/s.
+    pub damping: Vec<f64>,
+    /// Collision thickness per particle, m.
+    pub thickness: Vec<f64>,
+    /// Friction per particle (against objects without their own).
+    pub friction: Vec<f64>,
+    /// Springs.
+    pub springs: Vec<Spring>,
+    /// Springs of each particle: `adj_start[i]..adj_start[i+1]` indexes `adj` (other end, spring).
+    pub adj_start: Vec<u32>,
+    /// (other particle, spring index).
+    pub adj: Vec<(u32, u32)>,
+    /// Triangles of all pieces (for output, strain, areas).
+    pub triangles: Vec<[u32; 3]>,
+    /// The pieces.
+    pub pieces: Vec<PieceRange>,
+    /// Gravity, m/s^2.
+    pub gravity: Vec3,
+}
+
+impl ClothModel {
+    /// Assembles pieces, each with its fabric and its 3D placement, into one model. Returns the
+    /// model and the initial positions.
+    pub fn assemble(
+        pieces: &[(String, Piece, Fabric, Vec<Point3>)],
+        gravity: Vec3,
+    ) -> (ClothModel, Vec<Point3>) {
+        let mut m = ClothModel {
+            mass: Vec::new(),
+            inv_mass: Vec::new(),
+            damping: Vec::new(),
+            thickness: Vec::new(),
+            friction: Vec::new(),
+            springs: Vec::new(),
+            adj_start: Vec::new(),
+            adj: Vec::new(),
+            triangles: Vec::new(),
+            pieces: Vec::new(),
+            gravity,
+        };
+        let mut x = Vec::new();
+        for (name, p, fabric, placed) in pieces {
+            let off = m.mass.len() as u32;
+            m.pieces.push(PieceRange {
+                name: name.clone(),
+                first: off as usize,
+                count: p.flat.len(),
+                first_triangle: m.triangles.len(),
+                triangles: p.triangles.len(),
+                area: p.area,
+            });
+            let first = m.mass.len();
+            m.mass.extend_from_slice(&p.mass);
+            m.inv_mass.extend(p.mass.iter().map(|&w| 1.0 / w));
+            for &pin in &p.pinned {
+                m.inv_mass[first + pin as usize] = 0.0;
+            }
+            m.damping
+                .extend(std::iter::repeat_n(fabric.damping, p.flat.len()));
+            m.thickness
+                .extend(std::iter::repeat_n(fabric.thickness, p.flat.len()));
+            m.friction
+                .extend(std::iter::repeat_n(fabric.friction, p.flat.len()));
+            m.springs.extend(p.springs.iter().map(|s| Spring {
+                a: s.a + off,
+                b: s.b + off,
+                ..*s
+            }));
+            m.triangles
+                .extend(p.triangles.iter().map(|t| t.map(|v| v + off)));
+            x.extend_from_slice(placed);
+        }
+        let n = m.mass.len();
+        let mut count = vec![0u32; n + 1];
+        for s in &m.springs {
+            count[s.a as usize + 1] += 1;
+            count[s.b as usize + 1] += 1;
+        }
+        for i in 0..n {
+            count[i + 1] += count[i];
+        }
+        let mut fill = count.clone();
+        m.adj = vec![(0, 0); count[n] as usize];
+        for (si, s) in m.springs.iter().enumerate() {
+            for (p, q) in [(s.a, s.b), (s.b, s.a)] {
+                m.adj[fill[p as usize] as usize] = (q, si as u32);
+                fill[p as usize] += 1;
+            }
+        }
+        m.adj_start = count;
+        (m, x)
+    }
+
+    /// Number of particles.
+    pub fn len(&self) -> usize {
+        self.mass.len()
+    }
+
+    /// Whether there are no particles.
+    pub fn is_empty(&self) -> bool {
+        self.mass.is_empty()
+    }
+
+    /// Whether particle `i` is pinned.
+    #[inline]
+    pub fn pinned(&self, i: usize) -> bool {
+        self.inv_mass[i] == 0.0
+    }
+
+    /// Springs of one kind.
+    pub fn count(&self, kind: SpringKind) -> usize {
+        self.springs.iter().filter(|s| s.kind == kind).count()
+    }
+}

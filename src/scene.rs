@@ -1,0 +1,567 @@
+//! Scene files (TOML), validated into typed options before any work starts.
+//!
+//! ```toml
+//! units = "m"                      # all lengths of the file (not fabric tables): m, cm, mm
+//! gravity = [0.0, 0.0, -9.81]      # length units per s^2 (default: 9.81 m/s^2 down z)
+//! [solver]
+//! integrator = "leapfrog"          # or "explicit-euler"
+//! dt = 1e-4                        # s
+//! steps = 10000                    # or duration = 1.0 (s), or until_rest = 1e-6 (J, kinetic)
+//! max_steps = 1000000              # with until_rest: give up after this many
+//! [collision]
+//! cells = [50, 70, 30]             # per object, or "auto" (default)
+//! [[object]]
+//! mesh = "body.obj"                # any format drapekit reads, relative to this file; prepared
+//! up = "y"                         # the mesh's up axis, rotated to z; also scale, translate
+//! friction = 0.3                   # this object's friction (default: the fabric's)
+//! [[piece]]
+//! name = "skirt"                   # default piece1, piece2, ...
+//! outline = [[-0.5, -0.5], [0.5, -0.5], [0.5, 0.5], [-0.5, 0.5]]
+//! spacing = 0.01
+//! position = [0.0, 0.0, 0.5]       # where the piece's (0, 0) goes
+//! rotation = [0.0, 0.0, 0.0]       # degrees about x, then y, then z
+//! fabric = "cotton"                # a preset or a [fabric.NAME] table
+//! pin = [[-0.5, 0.5], [0.5, 0.5]]  # outline points (or grid crossings) held fixed
+//! [fabric.soft]                    # SI units, whatever `units` says
+//! base = "cotton"                  # start from a preset (optional), then override:
+//! stretch = 2000                   # N/m, or [warp, weft]; also density, shear, bend, damping,
+//!                                  # thickness, friction, or kes = {w, b, g, emt, t, miu}
+//! [output]
+//! ply = true                       # also write PLY
+//! frames = 100                     # write every 100th step to frames/
+//! [report]
+//! disc_radius = 0.09               # Cusick test: report the drape coefficient of each piece
+//! ```
+//! Any other key is an error that names it.
+
+use crate::cloth::fabric::{Fabric, Kes};
+use crate::cloth::Integrator;
+use crate::math::{Point2, Vec3};
+use crate::mesh::transform::{Units, Up};
+use serde::Deserialize;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// Errors in a scene file.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    /// The file could not be read.
+    #[error("cannot read {}: {source}", path.display())]
+    Read {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// TOML syntax, types, or unknown keys.
+    #[error("{}: {message}", path.display())]
+    Toml { path: PathBuf, message: String },
+    /// A value that cannot be.
+    #[error("{}: key '{key}': {message}", path.display())]
+    Key {
+        path: PathBuf,
+        key: String,
+        message: String,
+    },
+    /// An object's mesh.
+    #[error("{}: key '{key}': {source}", path.display())]
+    Mesh {
+        path: PathBuf,
+        key: String,
+        source: crate::io::IoError,
+    },
+    /// A piece's outline or pins.
+    #[error("{}: key '{key}': {source}", path.display())]
+    Piece {
+        path: PathBuf,
+        key: String,
+        source: crate::cloth::pattern::PatternError,
+    },
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct File {
+    units: Option<String>,
+    gravity: Option<[f64; 3]>,
+    solver: SolverFile,
+    collision: Option<CollisionFile>,
+    #[serde(default)]
+    object: Vec<ObjectFile>,
+    piece: Vec<PieceFile>,
+    #[serde(default)]
+    fabric: BTreeMap<String, FabricFile>,
+    output: Option<OutputFile>,
+    report: Option<ReportFile>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SolverFile {
+    integrator: Option<String>,
+    dt: f64,
+    steps: Option<u64>,
+    duration: Option<f64>,
+    until_rest: Option<f64>,
+    max_steps: Option<u64>,
+}
+
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum CellsFile {
+    Dims([usize; 3]),
+    Word(String),
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CollisionFile {
+    cells: Option<CellsFile>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ObjectFile {
+    mesh: String,
+    name: Option<String>,
+    up: Option<String>,
+    scale: Option<f64>,
+    translate: Option<[f64; 3]>,
+    friction: Option<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PieceFile {
+    name: Option<String>,
+    outline: Vec<[f64; 2]>,
+    spacing: f64,
+    position: Option<[f64; 3]>,
+    rotation: Option<[f64; 3]>,
+    fabric: Option<String>,
+    #[serde(default)]
+    pin: Vec<[f64; 2]>,
+}
+
+#[derive(Deserialize, Clone, Copy)]
+#[serde(untagged)]
+enum Pair {
+    One(f64),
+    Two([f64; 2]),
+}
+
+impl Pair {
+    fn get(self) -> [f64; 2] {
+        match self {
+            Pair::One(v) => [v, v],
+            Pair::Two(v) => v,
+        }
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct KesFile {
+    w: f64,
+    b: Pair,
+    g: f64,
+    emt: Pair,
+    t: f64,
+    miu: f64,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FabricFile {
+    base: Option<String>,
+    kes: Option<KesFile>,
+    density: Option<f64>,
+    stretch: Option<Pair>,
+    shear: Option<f64>,
+    bend: Option<Pair>,
+    damping: Option<f64>,
+    thickness: Option<f64>,
+    friction: Option<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct OutputFile {
+    ply: Option<bool>,
+    frames: Option<u64>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ReportFile {
+    disc_radius: Option<f64>,
+}
+
+/// When a run stops.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Stop {
+    /// After this many steps.
+    Steps(u64),
+    /// When the kinetic energy (J) falls below the threshold, or after `max_steps`.
+    UntilRest { energy: f64, max_steps: u64 },
+}
+
+/// Cells of the collision grids.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Cells {
+    /// The same counts for every object.
+    Fixed([usize; 3]),
+    /// The `auto` rule (`Collider::auto_dims`).
+    Auto,
+}
+
+/// An object, as the scene places it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ObjectSpec {
+    /// Name.
+    pub name: String,
+    /// The mesh file.
+    pub mesh: PathBuf,
+    /// Its up axis.
+    pub up: Up,
+    /// Scale applied first.
+    pub scale: f64,
+    /// Translation applied last, m.
+    pub translate: Vec3,
+    /// Friction, if the object has its own.
+    pub friction: Option<f64>,
+}
+
+/// A piece, as the scene places it (lengths in metres).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PieceSpec {
+    /// Name.
+    pub name: String,
+    /// Outline in the piece's plane.
+    pub outline: Vec<Point2>,
+    /// Particle spacing.
+    pub spacing: f64,
+    /// Where the piece's origin goes.
+    pub position: Vec3,
+    /// Degrees about x, then y, then z.
+    pub rotation: [f64; 3],
+    /// Its fabric.
+    pub fabric: Fabric,
+    /// The fabric's name.
+    pub fabric_name: String,
+    /// Pinned outline points.
+    pub pins: Vec<Point2>,
+}
+
+/// A validated scene. Lengths in metres.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Scene {
+    /// The scene file.
+    pub path: PathBuf,
+    /// Units of the file (outputs are written in them).
+    pub units: Units,
+    /// Gravity, m/s^2.
+    pub gravity: Vec3,
+    /// Integrator.
+    pub integrator: Integrator,
+    /// Time step, s.
+    pub dt: f64,
+    /// When to stop.
+    pub stop: Stop,
+    /// Grid cells.
+    pub cells: Cells,
+    /// Objects.
+    pub objects: Vec<ObjectSpec>,
+    /// Pieces.
+    pub pieces: Vec<PieceSpec>,
+    /// Also write PLY.
+    pub ply: bool,
+    /// Write every k-th step as a frame.
+    pub frames: Option<u64>,
+    /// Cusick disc radius, m.
+    pub disc_radius: Option<f64>,
+}
+
+/// Reads and validates a scene file (meshes are checked to exist, not read).
+pub fn read(path: &Path) -> Result<Scene, SceneError> {
+    let text = std::fs::read_to_string(path).map_err(|source| SceneError::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let f: File = toml::from_str(&text).map_err(|e| SceneError::Toml {
+        path: path.to_path_buf(),
+        message: e.to_string().trim_end().to_string(),
+    })?;
+    let key = |k: &str, m: String| SceneError::Key {
+        path: path.to_path_buf(),
+        key: k.to_string(),
+        message: m,
+    };
+    let units: Units = match f.units.as_deref() {
+        None => Units::M,
+        Some(u @ ("m" | "cm" | "mm")) => u.parse().unwrap(),
+        Some(u) => {
+            return Err(key(
+                "units",
+                format!("unknown unit '{u}': expected m, cm or mm"),
+            ))
+        }
+    };
+    let to_m = Units::factor(units, Units::M);
+    let finite = |k: &str, v: &[f64]| -> Result<(), SceneError> {
+        if v.iter().all(|x| x.is_finite()) {
+            Ok(())
+        } else {
+            Err(key(k, "must be finite numbers".into()))
+        }
+    };
+    let positive = |k: &str, v: f64| -> Result<f64, SceneError> {
+        if v.is_finite() && v > 0.0 {
+            Ok(v)
+        } else {
+            Err(key(k, format!("must be a positive number, got {v}")))
+        }
+    };
+    let gravity = match f.gravity {
+        Some(g) => {
+            finite("gravity", &g)?;
+            Vec3::from(g) * to_m
+        }
+        None => Vec3::new(0.0, 0.0, -9.81),
+    };
+    let integrator: Integrator = f
+        .solver
+        .integrator
+        .as_deref()
+        .unwrap_or("leapfrog")
+        .parse()
+        .map_err(|m| key("solver.integrator", m))?;
+    let dt = positive("solver.dt", f.solver.dt)?;
+    let s = &f.solver;
+    let stop = match (s.steps, s.duration, s.until_rest) {
+        (Some(n), None, None) if n > 0 => Stop::Steps(n),
+        (Some(_), None, None) => return Err(key("solver.steps", "must be at least 1".into())),
+        (None, Some(t), None) => {
+            Stop::Steps((positive("solver.duration", t)? / dt).round().max(1.0) as u64)
+        }
+        (None, None, Some(e)) => {
+            if !(e.is_finite() && e >= 0.0) {
+                return Err(key(
+                    "solver.until_rest",
+                    format!("must be a kinetic energy >= 0 (J), got {e}"),
+                ));
+            }
+            Stop::UntilRest {
+                energy: e,
+                max_steps: s.max_steps.unwrap_or(1_000_000).max(1),
+            }
+        }
+        _ => {
+            return Err(key(
+                "solver",
+                "give exactly one of steps, duration or until_rest".into(),
+            ))
+        }
+    };
+    if s.max_steps.is_some() && !matches!(stop, Stop::UntilRest { .. }) {
+        return Err(key("solver.max_steps", "goes with until_rest".into()));
+    }
+    let cells = match f.collision.and_then(|c| c.cells) {
+        None => Cells::Auto,
+        Some(CellsFile::Word(w)) if w == "auto" => Cells::Auto,
+        Some(CellsFile::Word(w)) => {
+            return Err(key(
+                "collision.cells",
+                format!("'{w}' is neither \"auto\" nor [nx, ny, nz]"),
+            ))
+        }
+        Some(CellsFile::Dims(d)) if d.iter().all(|&n| (1..=4096).contains(&n)) => Cells::Fixed(d),
+        Some(CellsFile::Dims(d)) => {
+            return Err(key(
+                "collision.cells",
+                format!("{d:?}: each count must be within 1..4096"),
+            ))
+        }
+    };
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let mut objects = Vec::new();
+    for (i, o) in f.object.iter().enumerate() {
+        let k = |field: &str| format!("object[{}].{field}", i + 1);
+        let mesh = dir.join(&o.mesh);
+        if !mesh.is_file() {
+            return Err(key(
+                &k("mesh"),
+                format!("{} does not exist", mesh.display()),
+            ));
+        }
+        let up: Up =
+            o.up.as_deref()
+                .unwrap_or("z")
+                .parse()
+                .map_err(|m| key(&k("up"), m))?;
+        let scale = positive(&k("scale"), o.scale.unwrap_or(1.0))?;
+        let translate = o.translate.unwrap_or([0.0; 3]);
+        finite(&k("translate"), &translate)?;
+        if let Some(fr) = o.friction {
+            if !(0.0..=1.0).contains(&fr) {
+                return Err(key(
+                    &k("friction"),
+                    format!("must be within 0..1, got {fr}"),
+                ));
+            }
+        }
+        let name = o.name.clone().unwrap_or_else(|| {
+            mesh.file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default()
+        });
+        objects.push(ObjectSpec {
+            name,
+            mesh,
+            up,
+            scale,
+            translate: Vec3::from(translate) * to_m,
+            friction: o.friction,
+        });
+    }
+    // Fabrics: tables first, so pieces can use them.
+    let mut fabrics: BTreeMap<String, Fabric> = BTreeMap::new();
+    for (name, t) in &f.fabric {
+        let k = |field: &str| format!("fabric.{name}.{field}");
+        let mut fab = match (&t.base, &t.kes) {
+            (Some(_), Some(_)) => {
+                return Err(key(
+                    &format!("fabric.{name}"),
+                    "give base or kes, not both".into(),
+                ))
+            }
+            (Some(b), None) => {
+                Fabric::preset(b).ok_or_else(|| key(&k("base"), unknown_preset(b)))?
+            }
+            (None, Some(kes)) => Fabric::from_kes(
+                &Kes {
+                    w: kes.w,
+                    b: kes.b.get(),
+                    g: kes.g,
+                    emt: kes.emt.get(),
+                    t: kes.t,
+                    miu: kes.miu,
+                },
+                0.5,
+            ),
+            (None, None) => Fabric::cotton(),
+        };
+        let full = t.base.is_some() || t.kes.is_some();
+        let need = |v: Option<f64>, field: &str| -> Result<Option<f64>, SceneError> {
+            if v.is_none() && !full {
+                return Err(key(
+                    &k(field),
+                    "is required (or start from a preset with base = \"...\")".into(),
+                ));
+            }
+            Ok(v)
+        };
+        if let Some(v) = need(t.density, "density")? {
+            fab.density = v;
+        }
+        if let Some(v) = need(t.stretch.map(|p| p.get()[0]), "stretch")? {
+            fab.stretch = t.stretch.map(|p| p.get()).unwrap_or([v, v]);
+        }
+        if let Some(v) = need(t.shear, "shear")? {
+            fab.shear = v;
+        }
+        if let Some(v) = need(t.bend.map(|p| p.get()[0]), "bend")? {
+            fab.bend = t.bend.map(|p| p.get()).unwrap_or([v, v]);
+        }
+        if let Some(v) = t.damping {
+            fab.damping = v;
+        }
+        if let Some(v) = t.thickness {
+            fab.thickness = v;
+        }
+        if let Some(v) = t.friction {
+            fab.friction = v;
+        }
+        fab.check().map_err(|(field, m)| key(&k(field), m))?;
+        fabrics.insert(name.clone(), fab);
+    }
+    if f.piece.is_empty() {
+        return Err(key("piece", "a scene needs at least one [[piece]]".into()));
+    }
+    let mut pieces = Vec::new();
+    for (i, p) in f.piece.iter().enumerate() {
+        let k = |field: &str| format!("piece[{}].{field}", i + 1);
+        let spacing = positive(&k("spacing"), p.spacing)? * to_m;
+        let fabric_name = p.fabric.clone().unwrap_or_else(|| "cotton".into());
+        let fabric = match fabrics.get(&fabric_name) {
+            Some(fb) => fb.clone(),
+            None => Fabric::preset(&fabric_name)
+                .ok_or_else(|| key(&k("fabric"), unknown_preset(&fabric_name)))?,
+        };
+        let position = p.position.unwrap_or([0.0; 3]);
+        finite(&k("position"), &position)?;
+        let rotation = p.rotation.unwrap_or([0.0; 3]);
+        finite(&k("rotation"), &rotation)?;
+        let outline: Vec<Point2> = p
+            .outline
+            .iter()
+            .map(|q| Point2::new(q[0] * to_m, q[1] * to_m))
+            .collect();
+        if outline.len() < 3 {
+            return Err(key(
+                &k("outline"),
+                format!("a polygon needs at least 3 points, got {}", outline.len()),
+            ));
+        }
+        pieces.push(PieceSpec {
+            name: p.name.clone().unwrap_or_else(|| format!("piece{}", i + 1)),
+            outline,
+            spacing,
+            position: Vec3::from(position) * to_m,
+            rotation,
+            fabric,
+            fabric_name,
+            pins: p
+                .pin
+                .iter()
+                .map(|q| Point2::new(q[0] * to_m, q[1] * to_m))
+                .collect(),
+        });
+    }
+    let mut names: Vec<&str> = pieces.iter().map(|p| p.name.as_str()).collect();
+    names.sort_unstable();
+    if let Some(w) = names.windows(2).find(|w| w[0] == w[1]) {
+        return Err(key(
+            "piece.name",
+            format!("two pieces are named '{}'", w[0]),
+        ));
+    }
+    let out = f.output.unwrap_or(OutputFile {
+        ply: None,
+        frames: None,
+    });
+    let disc_radius = match f.report.and_then(|r| r.disc_radius) {
+        Some(r) => Some(positive("report.disc_radius", r)? * to_m),
+        None => None,
+    };
+    Ok(Scene {
+        path: path.to_path_buf(),
+        units,
+        gravity,
+        integrator,
+        dt,
+        stop,
+        cells,
+        objects,
+        pieces,
+        ply: out.ply.unwrap_or(false),
+        frames: out.frames.filter(|&k| k > 0),
+        disc_radius,
+    })
+}
+
+fn unknown_preset(name: &str) -> String {
+    let names: Vec<&str> = Fabric::presets().iter().map(|(n, _)| *n).collect();
+    format!(
+        "unknown fabric '{name}': the presets are {}, or define it in a [fabric.{name}] table",
+        names.join(", ")
+    )
+}
