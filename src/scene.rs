@@ -22,6 +22,8 @@
 //! rotation = [0.0, 0.0, 0.0]       # degrees about x, then y, then z
 //! fabric = "cotton"                # a preset or a [fabric.NAME] table
 //! pin = [[-0.5, 0.5], [0.5, 0.5]]  # outline points (or grid crossings) held fixed
+//! pin_radius = 0.01                # also hold every particle this close to a pin (default 0)
+//! pin_segments = [[[-0.5, 0.5], [0.5, 0.5]]]  # hold every particle on these segments
 //! [fabric.soft]                    # SI units, whatever `units` says
 //! base = "cotton"                  # start from a preset (optional), then override:
 //! stretch = 2000                   # N/m, or [warp, weft]; also density, shear, bend, damping,
@@ -35,6 +37,7 @@
 //! Any other key is an error that names it.
 
 use crate::cloth::fabric::{Fabric, Kes};
+use crate::cloth::pattern::Pins;
 use crate::cloth::Integrator;
 use crate::math::{Point2, Vec3};
 use crate::mesh::transform::{Units, Up};
@@ -61,19 +64,19 @@ pub enum SceneError {
         key: String,
         message: String,
     },
-    /// An object's mesh.
-    #[error("{}: key '{key}': {source}", path.display())]
+    /// An object's mesh (the mesh's own error, which names its file and line).
+    #[error("{}: key '{key}': {error}", path.display())]
     Mesh {
         path: PathBuf,
         key: String,
-        source: crate::io::IoError,
+        error: crate::io::IoError,
     },
     /// A piece's outline or pins.
-    #[error("{}: key '{key}': {source}", path.display())]
+    #[error("{}: key '{key}': {error}", path.display())]
     Piece {
         path: PathBuf,
         key: String,
-        source: crate::cloth::pattern::PatternError,
+        error: crate::cloth::pattern::PatternError,
     },
 }
 
@@ -139,6 +142,9 @@ struct PieceFile {
     fabric: Option<String>,
     #[serde(default)]
     pin: Vec<[f64; 2]>,
+    pin_radius: Option<f64>,
+    #[serde(default)]
+    pin_segments: Vec<[[f64; 2]; 2]>,
 }
 
 #[derive(Deserialize, Clone, Copy)]
@@ -247,8 +253,8 @@ pub struct PieceSpec {
     pub fabric: Fabric,
     /// The fabric's name.
     pub fabric_name: String,
-    /// Pinned outline points.
-    pub pins: Vec<Point2>,
+    /// What holds it.
+    pub pins: Pins,
 }
 
 /// A validated scene. Lengths in metres.
@@ -511,6 +517,22 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
                 format!("a polygon needs at least 3 points, got {}", outline.len()),
             ));
         }
+        for q in &p.pin {
+            finite(&k("pin"), q)?;
+        }
+        for q in &p.pin_segments {
+            finite(&k("pin_segments"), &q.concat())?;
+        }
+        let pin_radius = match p.pin_radius {
+            None => 0.0,
+            Some(r) if r.is_finite() && r >= 0.0 => r * to_m,
+            Some(r) => {
+                return Err(key(
+                    &k("pin_radius"),
+                    format!("must be a length >= 0, got {r}"),
+                ))
+            }
+        };
         pieces.push(PieceSpec {
             name: p.name.clone().unwrap_or_else(|| format!("piece{}", i + 1)),
             outline,
@@ -519,11 +541,19 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
             rotation,
             fabric,
             fabric_name,
-            pins: p
-                .pin
-                .iter()
-                .map(|q| Point2::new(q[0] * to_m, q[1] * to_m))
-                .collect(),
+            pins: Pins {
+                points: p
+                    .pin
+                    .iter()
+                    .map(|q| Point2::new(q[0] * to_m, q[1] * to_m))
+                    .collect(),
+                radius: pin_radius,
+                segments: p
+                    .pin_segments
+                    .iter()
+                    .map(|s| s.map(|q| Point2::new(q[0] * to_m, q[1] * to_m)))
+                    .collect(),
+            },
         });
     }
     let mut names: Vec<&str> = pieces.iter().map(|p| p.name.as_str()).collect();

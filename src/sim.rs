@@ -99,14 +99,13 @@ pub fn load(scene: &Scene) -> Result<World, SceneError> {
     };
     let mut pieces = Vec::new();
     for (i, p) in scene.pieces.iter().enumerate() {
-        let built =
-            pattern::build(&p.outline, p.spacing, &p.fabric, &p.pins).map_err(|source| {
-                SceneError::Piece {
-                    path: scene.path.clone(),
-                    key: format!("piece[{}].outline", i + 1),
-                    source,
-                }
-            })?;
+        let built = pattern::build(&p.outline, p.spacing, &p.fabric, &p.pins).map_err(|error| {
+            SceneError::Piece {
+                path: scene.path.clone(),
+                key: format!("piece[{}].outline", i + 1),
+                error,
+            }
+        })?;
         let r = rotation(p.rotation);
         let placed: Vec<Point3> = built
             .flat
@@ -127,10 +126,10 @@ pub fn load(scene: &Scene) -> Result<World, SceneError> {
     for (i, o) in scene.objects.iter().enumerate() {
         let k = format!("object[{}].mesh", i + 1);
         let mut mesh = crate::io::read_mesh(&o.mesh, &crate::io::ReadOptions::default())
-            .map_err(|source| SceneError::Mesh {
+            .map_err(|error| SceneError::Mesh {
                 path: scene.path.clone(),
                 key: k.clone(),
-                source,
+                error,
             })?
             .mesh;
         prepare(&mut mesh, &PrepareOptions::default());
@@ -357,10 +356,12 @@ pub fn run(
                         }
                         far = far.max((xs[k] - x[i]).norm_squared());
                     }
-                    collision_nanos.fetch_add(
-                        t.elapsed().as_nanos() as u64,
-                        std::sync::atomic::Ordering::Relaxed,
-                    );
+                    if any_reach {
+                        collision_nanos.fetch_add(
+                            t.elapsed().as_nanos() as u64,
+                            std::sync::atomic::Ordering::Relaxed,
+                        );
+                    }
                     let mut m = moved.lock().unwrap();
                     *m = m.max(far);
                 },
@@ -600,7 +601,8 @@ pub fn drape_coefficient(world: &World, piece: usize, disc_radius: f64) -> f64 {
 pub fn stable_step_for(fabric: &Fabric, spacing: f64, integrator: Integrator) -> f64 {
     let s = 10.0 * spacing;
     let outline = [(-s, -s), (s, -s), (s, s), (-s, s)].map(|(x, y)| crate::math::Point2::new(x, y));
-    let p = pattern::build(&outline, spacing, fabric, &[]).expect("a square piece");
+    let p = pattern::build(&outline, spacing, fabric, &pattern::Pins::default())
+        .expect("a square piece");
     let placed = p.flat.iter().map(|q| Point3::new(q.x, q.y, 0.0)).collect();
     let (m, x) = ClothModel::assemble(
         &[("probe".into(), p, fabric.clone(), placed)],

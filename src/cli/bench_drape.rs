@@ -110,7 +110,8 @@ fn bench_world(torso: &TriMesh, cells: [usize; 3]) -> (World, f64) {
         (-side / 2.0, side / 2.0),
     ]
     .map(|(x, y)| Point2::new(x, y));
-    let piece = pattern::build(&outline, 0.01, &fabric, &[]).expect("a square");
+    let piece =
+        pattern::build(&outline, 0.01, &fabric, &pattern::Pins::default()).expect("a square");
     let c = b.center();
     let placed: Vec<Point3> = piece
         .flat
@@ -286,7 +287,7 @@ fn hanging_world(integrator: Integrator) -> World {
         &outline,
         0.02,
         &fabric,
-        &[Point2::new(-s, s), Point2::new(s, s)],
+        &pattern::Pins::at(&[Point2::new(-s, s), Point2::new(s, s)]),
     )
     .expect("a square");
     let placed: Vec<Point3> = piece

@@ -74,9 +74,9 @@ pub struct DrapeReport {
     pub units: Units,
     /// Particles.
     pub particles: usize,
-    /// Springs.
+    /// Springs and bending elements (the paper's stretch, shear and bend connections).
     pub springs: usize,
-    /// Of which stretch, shear, bend.
+    /// Of which stretch springs, shear springs, bending elements.
     pub springs_by_kind: [usize; 3],
     /// Faces of all objects.
     pub object_faces: usize,
@@ -147,8 +147,18 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
             out.display()
         );
     }
-    std::fs::create_dir_all(out)
-        .map_err(|e| anyhow::anyhow!("cannot create {}: {e}", out.display()))?;
+    // Nothing is created until there is something to write; a failed run removes what it wrote.
+    let out_existed = out.exists();
+    let written = std::cell::RefCell::new(Vec::<PathBuf>::new());
+    let cleanup = || {
+        for f in written.borrow().iter() {
+            let _ = std::fs::remove_file(f);
+        }
+        let _ = std::fs::remove_dir(out.join("frames"));
+        if !out_existed {
+            let _ = std::fs::remove_dir(out);
+        }
+    };
     let to_units = crate::mesh::transform::Units::factor(Units::M, sc.units);
     let inputs: Vec<&Path> = std::iter::once(sc.path.as_path())
         .chain(sc.objects.iter().map(|o| o.mesh.as_path()))
@@ -186,6 +196,7 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
                 step,
                 message: e.to_string(),
             })?;
+            written.borrow_mut().push(p);
         }
         Ok(())
     };
@@ -206,7 +217,17 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
     if let Some(b) = &bar {
         b.finish_and_clear();
     }
-    let stats = stats?;
+    let stats = match stats {
+        Ok(s) => s,
+        Err(e) => {
+            cleanup();
+            return Err(e.into());
+        }
+    };
+    if let Err(e) = std::fs::create_dir_all(out) {
+        cleanup();
+        anyhow::bail!("cannot create {}: {e}", out.display());
+    }
     let mut pieces = Vec::new();
     for (i, p) in sc.pieces.iter().enumerate() {
         let mesh = piece_mesh(&world, i, to_units);
@@ -217,7 +238,11 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
             vec!["obj"]
         } {
             let path = out.join(format!("{}.{ext}", p.name));
-            io::write_mesh(&path, &mesh, &WriteOptions::default(), &inputs)?;
+            if let Err(e) = io::write_mesh(&path, &mesh, &WriteOptions::default(), &inputs) {
+                cleanup();
+                return Err(e.into());
+            }
+            written.borrow_mut().push(path.clone());
             files.push(path.display().to_string());
         }
         let r = &world.model.pieces[i];
@@ -254,13 +279,12 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
         output_dir: out.display().to_string(),
         units: sc.units,
         particles: m.len(),
-        springs: m.springs.len(),
+        springs: m.springs.len() + m.bends(),
         springs_by_kind: [
-            crate::cloth::pattern::SpringKind::Stretch,
-            crate::cloth::pattern::SpringKind::Shear,
-            crate::cloth::pattern::SpringKind::Bend,
-        ]
-        .map(|k| m.count(k)),
+            m.count(crate::cloth::pattern::SpringKind::Stretch),
+            m.count(crate::cloth::pattern::SpringKind::Shear),
+            m.bends(),
+        ],
         object_faces: world.colliders.iter().map(|c| c.mesh.faces.len()).sum(),
         cells: world.colliders.iter().map(|c| c.dims).collect(),
         integrator: sc.integrator,

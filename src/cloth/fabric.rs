@@ -1,17 +1,19 @@
 //! Fabric parameters, their conversion from Kawabata (KES-F) measurements, and named presets.
 //!
-//! A fabric is given in material terms, independent of the particle spacing `h`; the springs of
-//! the paper's model (`method.md` s. 2) get their constants from them:
+//! A fabric is given in material terms, independent of the particle spacing `h`; the springs and
+//! bending elements of the paper's model (`method.md` s. 2) get their constants from them:
 //!
 //! * **stretch** `E` (N/m, force per unit width per unit strain), warp and weft: a spring along a
 //!   thread between neighbours carries a strip of width `h` over length `h`, so `k = E`.
 //! * **shear** `G` (N/m per radian): the two diagonal springs of a cell sheared by `g` store
 //!   `k h^2 g^2 / 2`, the continuum's `G g^2 h^2 / 2`, so `k = G`.
-//! * **bend** `B` (N m, bending rigidity per unit width), warp and weft: the paper's bend spring
-//!   over one node is linear in length, so for a fold of angle `t` at the node it stores
-//!   `k h^2 t^4 / 32` where a strip of width `h` stores `B t^2 / 2`. The two agree at the
-//!   reference fold [`BEND_REFERENCE_ANGLE`] (0.5 rad per node) when `k = 16 B / (h t_ref)^2`.
-//!   Below it the spring is softer, above it stiffer; the drape still stiffens with `B`.
+//! * **bend** `B` (N m, bending rigidity per unit width), warp and weft: the paper connects each
+//!   node's two neighbours over it along a thread. A strip of width `h` bent to curvature `k`
+//!   stores `B k^2 h^2 / 2` per node, and the second difference `x_{i-1} - 2 x_i + x_{i+1}` is
+//!   `h^2 k` long, so the element over the node stores `(B / h^2) |x_{i-1} - 2 x_i + x_{i+1}|^2 / 2`
+//!   (`cloth::pattern`). The paper's linear spring between the same two particles stores
+//!   `k h^2 t^4 / 32` for a fold of `t` radians: nothing for gentle folds, and it adds `4k` to the
+//!   tensile stiffness; we keep its neighbours and replace its law.
 //! * **density** (kg/m^2) gives the particle masses (a third of each incident triangle's area).
 //! * **damping** (1/s) is air damping, the force `-damping * m * v` of the paper's `-c_i r_i'`.
 //! * **thickness** (m): particles are kept this far from object faces.
@@ -28,9 +30,6 @@
 //! measurement of one particular cloth. Give your own with a `[fabric.NAME]` table.
 
 use serde::Serialize;
-
-/// The reference fold angle (radians per node) at which bend springs match the continuum.
-pub const BEND_REFERENCE_ANGLE: f64 = 0.5;
 
 /// A fabric (SI units).
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -164,15 +163,29 @@ impl Fabric {
         Fabric::preset("cotton").expect("a preset")
     }
 
-    /// Spring constant of a stretch spring along direction `(c, s)` (cosine and sine with warp).
-    pub fn stretch_k(&self, c: f64, s: f64) -> f64 {
-        self.stretch[0] * c * c + self.stretch[1] * s * s
-    }
-
-    /// Spring constant of a bend spring over one node of spacing `h`, along `(c, s)`.
-    pub fn bend_k(&self, h: f64, c: f64, s: f64) -> f64 {
-        let b = self.bend[0] * c * c + self.bend[1] * s * s;
-        16.0 * b / (h * BEND_REFERENCE_ANGLE).powi(2)
+    /// Tensile modulus (N/m) along the direction `(c, s)` (cosine and sine with the warp) of the
+    /// orthotropic sheet: `1 / (c^4 / E_warp + s^4 / E_weft + c^2 s^2 / G)`. Along the threads it
+    /// is the thread's stiffness; on the bias (45 degrees) about `4 G`, as woven cloth stretches
+    /// on the bias.
+    ///
+    /// ```
+    /// use drapekit::cloth::fabric::Fabric;
+    /// let f = Fabric { stretch: [1000.0, 500.0], shear: 10.0, ..Fabric::cotton() };
+    /// assert!((f.directional_stretch(1.0, 0.0) - 1000.0).abs() < 1e-9);
+    /// assert!((f.directional_stretch(0.0, 1.0) - 500.0).abs() < 1e-9);
+    /// let r = 0.5f64.sqrt();
+    /// assert!((f.directional_stretch(r, r) - 1.0 / (0.25e-3 + 0.5e-3 + 0.025)).abs() < 1e-9);
+    /// ```
+    pub fn directional_stretch(&self, c: f64, s: f64) -> f64 {
+        let (c2, s2) = (c * c, s * s);
+        let mut compliance = c2 * c2 / self.stretch[0] + s2 * s2 / self.stretch[1];
+        if c2 * s2 > 0.0 {
+            if self.shear <= 0.0 {
+                return 0.0;
+            }
+            compliance += c2 * s2 / self.shear;
+        }
+        1.0 / compliance
     }
 
     /// Checks every value: the name of the first bad field and why.

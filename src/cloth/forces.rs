@@ -1,5 +1,10 @@
 //! Forces: springs, gravity, air damping (`method.md` s. 2):
-//! `m_i r_i'' = -c_i r_i' + m_i g + sum_j k_ij (|r_j - r_i| - l0_ij) (r_j - r_i) / |r_j - r_i|`.
+//! `m_i r_i'' = -c_i r_i' + m_i g + sum_j k_ij (|r_j - r_i| - l0_ij) (r_j - r_i) / |r_j - r_i|`
+//! plus bending.
+//!
+//! Bending (`cloth::pattern`): each element over a node stores `c |sum_k w_k x_k|^2 / 2`, so
+//! its force on particle `k` is `-c w_k sum_j w_j x_j`: linear in the positions, zero on the flat
+//! piece and under rigid motions.
 //!
 //! Each particle gathers its own springs (every spring is evaluated from both ends), so the
 //! loop runs in parallel over fixed chunks of particles without atomics, and the result does
@@ -26,6 +31,11 @@ pub fn force_on(model: &ClothModel, x: &[Point3], v: &[Vec3], i: usize) -> Vec3 
             acc += d * (spring.k * (len - spring.rest) / len);
         }
     }
+    for &(e, w) in
+        &model.bend_adj[model.bend_adj_start[i] as usize..model.bend_adj_start[i + 1] as usize]
+    {
+        acc -= model.bend_vector(e as usize, x) * (model.bend_c[e as usize] * w);
+    }
     acc
 }
 
@@ -40,7 +50,7 @@ pub fn forces(model: &ClothModel, x: &[Point3], v: &[Vec3], out: &mut [Vec3]) {
         });
 }
 
-/// Energy in the springs, J.
+/// Energy in the springs and bending elements, J.
 pub fn spring_energy(model: &ClothModel, x: &[Point3]) -> f64 {
     model
         .springs
@@ -49,7 +59,10 @@ pub fn spring_energy(model: &ClothModel, x: &[Point3]) -> f64 {
             let e = (x[s.b as usize] - x[s.a as usize]).norm() - s.rest;
             0.5 * s.k * e * e
         })
-        .sum()
+        .sum::<f64>()
+        + (0..model.bends())
+            .map(|e| 0.5 * model.bend_c[e] * model.bend_vector(e, x).norm_squared())
+            .sum::<f64>()
 }
 
 /// Kinetic energy, J.

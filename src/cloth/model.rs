@@ -42,6 +42,20 @@ pub struct ClothModel {
     pub adj_start: Vec<u32>,
     /// (other particle, spring index).
     pub adj: Vec<(u32, u32)>,
+    /// Bending elements: `bend_start[e]..bend_start[e+1]` indexes `bend_nodes` and
+    /// `bend_weights` of element `e`; its energy is `bend_c[e] |sum w x|^2 / 2`.
+    pub bend_start: Vec<u32>,
+    /// Particles of the bending elements.
+    pub bend_nodes: Vec<u32>,
+    /// Their weights.
+    pub bend_weights: Vec<f64>,
+    /// Constants of the bending elements, N/m.
+    pub bend_c: Vec<f64>,
+    /// Bending elements of each particle: `bend_adj_start[i]..bend_adj_start[i+1]` indexes
+    /// `bend_adj` (element, the particle's weight in it).
+    pub bend_adj_start: Vec<u32>,
+    /// (element, weight).
+    pub bend_adj: Vec<(u32, f64)>,
     /// Triangles of all pieces (for output, strain, areas).
     pub triangles: Vec<[u32; 3]>,
     /// The pieces.
@@ -66,6 +80,12 @@ impl ClothModel {
             springs: Vec::new(),
             adj_start: Vec::new(),
             adj: Vec::new(),
+            bend_start: vec![0],
+            bend_nodes: Vec::new(),
+            bend_weights: Vec::new(),
+            bend_c: Vec::new(),
+            bend_adj_start: Vec::new(),
+            bend_adj: Vec::new(),
             triangles: Vec::new(),
             pieces: Vec::new(),
             gravity,
@@ -98,6 +118,12 @@ impl ClothModel {
                 b: s.b + off,
                 ..*s
             }));
+            for e in &p.bends {
+                m.bend_nodes.extend(e.nodes.iter().map(|v| v + off));
+                m.bend_weights.extend_from_slice(&e.weights);
+                m.bend_c.push(e.c);
+                m.bend_start.push(m.bend_nodes.len() as u32);
+            }
             m.triangles
                 .extend(p.triangles.iter().map(|t| t.map(|v| v + off)));
             x.extend_from_slice(placed);
@@ -120,6 +146,23 @@ impl ClothModel {
             }
         }
         m.adj_start = count;
+        let mut count = vec![0u32; n + 1];
+        for &v in &m.bend_nodes {
+            count[v as usize + 1] += 1;
+        }
+        for i in 0..n {
+            count[i + 1] += count[i];
+        }
+        let mut fill = count.clone();
+        m.bend_adj = vec![(0, 0.0); count[n] as usize];
+        for e in 0..m.bend_c.len() {
+            for k in m.bend_start[e] as usize..m.bend_start[e + 1] as usize {
+                let v = m.bend_nodes[k] as usize;
+                m.bend_adj[fill[v] as usize] = (e as u32, m.bend_weights[k]);
+                fill[v] += 1;
+            }
+        }
+        m.bend_adj_start = count;
         (m, x)
     }
 
@@ -137,6 +180,23 @@ impl ClothModel {
     #[inline]
     pub fn pinned(&self, i: usize) -> bool {
         self.inv_mass[i] == 0.0
+    }
+
+    /// Number of bending elements.
+    pub fn bends(&self) -> usize {
+        self.bend_c.len()
+    }
+
+    /// The weighted sum `sum w x` of bending element `e`.
+    #[inline]
+    pub fn bend_vector(&self, e: usize, x: &[Point3]) -> Vec3 {
+        let (a, b) = (self.bend_start[e] as usize, self.bend_start[e + 1] as usize);
+        self.bend_nodes[a..b]
+            .iter()
+            .zip(&self.bend_weights[a..b])
+            .fold(Vec3::zeros(), |acc, (&v, &w)| {
+                acc + x[v as usize].coords * w
+            })
     }
 
     /// Springs of one kind.

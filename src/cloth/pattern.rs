@@ -14,9 +14,13 @@
 //! * grid particles get the paper's 12 neighbours: stretch to the 4 direct neighbours (warp or
 //!   weft), shear on the 4 cell diagonals, bend over one node to the 4 second neighbours along
 //!   the threads (when the node between exists);
-//! * in the band, every triangle edge not already a grid spring is a stretch spring whose
-//!   constant follows its direction (`E_warp cos^2 + E_weft sin^2`), and every interior band
-//!   edge gets a bend spring between the two corners opposite it.
+//! * in the band, every triangle edge not already a grid spring is a spring of constant
+//!   `E(theta) A / l^2`: `l` its length, `A` the area of its one or two triangles, `E(theta)`
+//!   the fabric's tensile modulus along it (`Fabric::directional_stretch`: the thread's
+//!   stiffness along a thread, about `4 G` on the bias). On a grid-like band this is the grid's
+//!   rule exactly: a thread edge inside the cloth gets `E`, one on the outline `E / 2` (it
+//!   carries half a strip), a lone cell diagonal `2 G` (the shear of the cell's two diagonal
+//!   springs). Every interior band edge also gets a bend spring between the corners opposite.
 //!
 //! Bend springs are made only when the fabric has a bending rigidity: a scene computes only
 //! what it needs.
@@ -38,8 +42,6 @@ pub enum SpringKind {
     Stretch,
     /// A cell diagonal.
     Shear,
-    /// Over one node.
-    Bend,
 }
 
 /// A linear spring `F = k (|d| - rest) d / |d|`.
@@ -57,6 +59,119 @@ pub struct Spring {
     pub kind: SpringKind,
 }
 
+/// A bending element: energy `c |sum_k w_k x_k|^2 / 2` (J) over a few particles whose weights
+/// sum to zero and whose weighted sum vanishes on the flat piece.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Bend {
+    /// The particles; the first is the node the element bends over.
+    pub nodes: Vec<u32>,
+    /// Their weights.
+    pub weights: Vec<f64>,
+    /// The constant, N/m.
+    pub c: f64,
+}
+
+/// Cotangent weights above this mark a sliver triangle; its node gets no bending element.
+const MAX_COT: f64 = 1e3;
+
+/// Bending elements of a piece: the two over-one-node stencils at every grid node whose four
+/// thread neighbours exist, the cotangent Laplacian of its ring at every other particle off the
+/// outline (see the module notes). `grid(i, j)` is the particle at grid crossing (i, j) or
+/// `u32::MAX`.
+fn bend_elements(
+    flat: &[Point2],
+    triangles: &[[u32; 3]],
+    grid_particles: usize,
+    fabric: &Fabric,
+    h: f64,
+    grid: impl Fn(i64, i64) -> u32,
+) -> Vec<Bend> {
+    let mut bends = Vec::new();
+    if fabric.bend[0] <= 0.0 && fabric.bend[1] <= 0.0 {
+        return bends;
+    }
+    let mut paired = vec![false; flat.len()];
+    for (v, q) in flat.iter().enumerate().take(grid_particles) {
+        let (i, j) = ((q.x / h).round() as i64, (q.y / h).round() as i64);
+        let n = [
+            grid(i - 1, j),
+            grid(i + 1, j),
+            grid(i, j - 1),
+            grid(i, j + 1),
+        ];
+        if n.contains(&u32::MAX) {
+            continue;
+        }
+        paired[v] = true;
+        for (a, b, k) in [(n[0], n[1], fabric.bend[0]), (n[2], n[3], fabric.bend[1])] {
+            if k > 0.0 {
+                bends.push(Bend {
+                    nodes: vec![v as u32, a, b],
+                    weights: vec![-2.0, 1.0, 1.0],
+                    c: k / (h * h),
+                });
+            }
+        }
+    }
+    // Cotangent weights and a third of the incident triangles' area for every other node.
+    let mut ring: HashMap<u32, Vec<(u32, f64)>> = HashMap::new();
+    let mut dual = vec![0.0; flat.len()];
+    for t in triangles {
+        let area = 0.5
+            * orient2d(
+                &flat[t[0] as usize],
+                &flat[t[1] as usize],
+                &flat[t[2] as usize],
+            );
+        for e in 0..3 {
+            let (a, b, c) = (t[e], t[(e + 1) % 3], t[(e + 2) % 3]);
+            dual[a as usize] += area / 3.0;
+            let (u, w) = (
+                flat[a as usize] - flat[c as usize],
+                flat[b as usize] - flat[c as usize],
+            );
+            let cot = u.dot(&w) / (u.x * w.y - u.y * w.x).abs();
+            for (p, q) in [(a, b), (b, a)] {
+                if (p as usize) < grid_particles && !paired[p as usize] {
+                    ring.entry(p).or_default().push((q, 0.5 * cot));
+                }
+            }
+        }
+    }
+    let b = 0.5 * (fabric.bend[0] + fabric.bend[1]);
+    let mut nodes: Vec<u32> = ring.keys().copied().collect();
+    nodes.sort_unstable();
+    for v in nodes {
+        let mut r = ring.remove(&v).unwrap_or_default();
+        r.sort_by_key(|e| e.0);
+        let mut merged: Vec<(u32, f64)> = Vec::new();
+        for (q, w) in r {
+            match merged.last_mut() {
+                Some(last) if last.0 == q => last.1 += w,
+                _ => merged.push((q, w)),
+            }
+        }
+        if merged
+            .iter()
+            .any(|e| !e.1.is_finite() || e.1.abs() > MAX_COT)
+            || dual[v as usize] <= 0.0
+        {
+            continue;
+        }
+        let mut el = Bend {
+            nodes: vec![v],
+            weights: vec![-merged.iter().map(|e| e.1).sum::<f64>()],
+            c: b / dual[v as usize],
+        };
+        for (q, w) in merged {
+            el.nodes.push(q);
+            el.weights.push(w);
+        }
+        bends.push(el);
+    }
+    bends
+}
+
 /// A pattern piece, flat.
 #[derive(Debug, Clone)]
 pub struct Piece {
@@ -66,6 +181,8 @@ pub struct Piece {
     pub triangles: Vec<[u32; 3]>,
     /// Springs.
     pub springs: Vec<Spring>,
+    /// Bending elements.
+    pub bends: Vec<Bend>,
     /// Particle masses, kg.
     pub mass: Vec<f64>,
     /// Pinned particles.
@@ -102,6 +219,13 @@ pub enum PatternError {
     /// Too many particles.
     #[error("spacing {spacing} gives {count} grid nodes over the outline's box; at most 4,000,000: use a larger spacing")]
     TooFine { spacing: f64, count: usize },
+    /// A pinned segment with no particle on it.
+    #[error("pin segment {index} from {a:?} to {b:?} has no particle on it; segments must run along the outline or grid lines")]
+    PinSegment {
+        index: usize,
+        a: [f64; 2],
+        b: [f64; 2],
+    },
     /// A pin away from every particle.
     #[error("pin {index} at ({x}, {y}) is {distance:.3e} from the nearest particle; pins must be outline points or grid crossings")]
     Pin {
@@ -110,6 +234,18 @@ pub enum PatternError {
         y: f64,
         distance: f64,
     },
+}
+
+/// Distance from `p` to the segment `a b`.
+fn segment_distance(p: &Point2, a: &Point2, b: &Point2) -> f64 {
+    let d = b - a;
+    let l2 = d.norm_squared();
+    let t = if l2 > 0.0 {
+        ((p - a).dot(&d) / l2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (p - (a + d * t)).norm()
 }
 
 /// Whether segments (a, b) and (c, d) cross or touch, beyond shared endpoints.
@@ -195,12 +331,38 @@ fn distance_to_outline(poly: &[Point2], q: &Point2) -> f64 {
         .fold(f64::INFINITY, f64::min)
 }
 
+/// What a piece is held by (piece-plane coordinates, m).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Pins {
+    /// Points: each holds the particle nearest to it (which must be within half a spacing: an
+    /// outline point or a grid crossing) and every particle within `radius` of it.
+    pub points: Vec<Point2>,
+    /// The size of the clip at each point, m (default 0: the one particle).
+    pub radius: f64,
+    /// Segments: each holds every particle on it (within a thousandth of a spacing), like a
+    /// curtain rod or a clamp across an edge. At least one particle must be on it.
+    pub segments: Vec<[Point2; 2]>,
+}
+
+impl Pins {
+    /// Pins at points, each holding one particle.
+    pub fn at(points: &[Point2]) -> Pins {
+        Pins {
+            points: points.to_vec(),
+            ..Pins::default()
+        }
+    }
+}
+
 /// Builds a piece from its outline (piece-plane coordinates, m), spacing (m), fabric and pins.
+///
+/// A clip of finite size (`Pins::radius`, or a segment) keeps a pinned answer convergent as the
+/// spacing shrinks: a point load stretches a membrane without bound near the point.
 pub fn build(
     outline: &[Point2],
     spacing: f64,
     fabric: &Fabric,
-    pins: &[Point2],
+    pins: &Pins,
 ) -> Result<Piece, PatternError> {
     if !(spacing.is_finite() && spacing > 0.0) {
         return Err(PatternError::Spacing { spacing });
@@ -381,7 +543,6 @@ pub fn build(
             });
         }
     };
-    let bends = fabric.bend[0] > 0.0 || fabric.bend[1] > 0.0;
     for j in 0..nj {
         for i in 0..ni {
             let a = id(i, j);
@@ -408,17 +569,6 @@ pub fn build(
                     );
                     paired.insert((a.min(b), a.max(b)));
                 }
-                if bends {
-                    let (m, c) = (at(di, dj), at(2 * di, 2 * dj));
-                    if m != u32::MAX && c != u32::MAX {
-                        let k = if kind == 0 {
-                            fabric.bend_k(h, 1.0, 0.0)
-                        } else {
-                            fabric.bend_k(h, 0.0, 1.0)
-                        };
-                        add(&mut springs, a, c, k, SpringKind::Bend);
-                    }
-                }
             }
             for (di, dj) in [(1, 1), (-1, 1)] {
                 let b = at(di, dj);
@@ -435,7 +585,7 @@ pub fn build(
             }
         }
     }
-    // The band: stretch along every new edge, bend across every interior edge.
+    // The band: a spring along every new edge.
     let mut opposite: HashMap<(u32, u32), Vec<u32>> = HashMap::new();
     for t in &band {
         for e in 0..3 {
@@ -449,32 +599,34 @@ pub fn build(
         if !paired.contains(&(a, b)) {
             let d = flat[b as usize] - flat[a as usize];
             let l = d.norm();
+            let tributary: f64 = opp
+                .iter()
+                .map(|&c| {
+                    0.5 * orient2d(&flat[a as usize], &flat[b as usize], &flat[c as usize]).abs()
+                })
+                .sum();
             add(
                 &mut springs,
                 a,
                 b,
-                fabric.stretch_k(d.x / l, d.y / l),
+                fabric.directional_stretch(d.x / l, d.y / l) * tributary / (l * l),
                 SpringKind::Stretch,
             );
             paired.insert((a, b));
         }
-        if bends && opp.len() == 2 {
-            let d = flat[opp[1] as usize] - flat[opp[0] as usize];
-            let l = d.norm();
-            if l > 0.0 {
-                add(
-                    &mut springs,
-                    opp[0],
-                    opp[1],
-                    fabric.bend_k(l / 2.0, d.x / l, d.y / l),
-                    SpringKind::Bend,
-                );
-            }
-        }
     }
 
+    let bends = bend_elements(&flat, &triangles, grid_particles, fabric, h, |i, j| {
+        let (i, j) = (i - i0, j - j0);
+        if i < 0 || j < 0 || i >= ni as i64 || j >= nj as i64 {
+            u32::MAX
+        } else {
+            id(i as usize, j as usize)
+        }
+    });
+
     let mut pinned = Vec::new();
-    for (pi, pin) in pins.iter().enumerate() {
+    for (pi, pin) in pins.points.iter().enumerate() {
         let (best, dist) = flat
             .iter()
             .enumerate()
@@ -490,6 +642,28 @@ pub fn build(
             });
         }
         pinned.push(best as u32);
+        pinned.extend(
+            flat.iter()
+                .enumerate()
+                .filter(|(_, q)| (*q - pin).norm() <= pins.radius)
+                .map(|(i, _)| i as u32),
+        );
+    }
+    for (si, [a, b]) in pins.segments.iter().enumerate() {
+        let before = pinned.len();
+        pinned.extend(
+            flat.iter()
+                .enumerate()
+                .filter(|(_, q)| segment_distance(q, a, b) <= 1e-3 * h)
+                .map(|(i, _)| i as u32),
+        );
+        if pinned.len() == before {
+            return Err(PatternError::PinSegment {
+                index: si + 1,
+                a: [a.x, a.y],
+                b: [b.x, b.y],
+            });
+        }
     }
     pinned.sort_unstable();
     pinned.dedup();
@@ -497,6 +671,7 @@ pub fn build(
         flat,
         triangles,
         springs,
+        bends,
         mass,
         pinned,
         area,
@@ -520,7 +695,7 @@ mod tests {
     #[test]
     fn square_piece_is_covered_and_weighs_its_area() {
         let f = Fabric::cotton();
-        let p = build(&square(0.5), 0.05, &f, &[Point2::new(-0.5, 0.5)]).unwrap();
+        let p = build(&square(0.5), 0.05, &f, &Pins::at(&[Point2::new(-0.5, 0.5)])).unwrap();
         assert!((p.area - 1.0).abs() < 1e-12, "{}", p.area);
         let m: f64 = p.mass.iter().sum();
         assert!((m - f.density).abs() < 1e-12);
@@ -565,24 +740,102 @@ mod tests {
 
     #[test]
     fn interior_particles_have_twelve_neighbours() {
-        let p = build(&square(0.5), 0.05, &Fabric::cotton(), &[]).unwrap();
-        let mut count = vec![0; p.flat.len()];
+        let p = build(&square(0.5), 0.05, &Fabric::cotton(), &Pins::default()).unwrap();
+        // Neighbours: spring partners and the other particles of shared bending elements.
+        let mut nb = vec![std::collections::BTreeSet::new(); p.flat.len()];
         for s in &p.springs {
-            if (s.a as usize) < p.grid_particles && (s.b as usize) < p.grid_particles {
-                count[s.a as usize] += 1;
-                count[s.b as usize] += 1;
+            nb[s.a as usize].insert(s.b);
+            nb[s.b as usize].insert(s.a);
+        }
+        for e in p.bends.iter().filter(|e| e.nodes.len() == 3) {
+            for &a in &e.nodes {
+                for &b in &e.nodes {
+                    if a != b {
+                        nb[a as usize].insert(b);
+                    }
+                }
             }
         }
-        assert_eq!(count.iter().max(), Some(&12));
+        let interior: Vec<usize> = (0..p.grid_particles)
+            .filter(|&v| p.flat[v].x.abs() < 0.3 && p.flat[v].y.abs() < 0.3)
+            .collect();
+        assert!(!interior.is_empty());
+        for v in interior {
+            assert_eq!(nb[v].len(), 12, "particle {v} at {:?}", p.flat[v]);
+        }
+        // Each flat piece is at rest: every bending element's weighted sum vanishes.
+        for e in &p.bends {
+            let b: crate::math::Vec2 = e
+                .nodes
+                .iter()
+                .zip(&e.weights)
+                .map(|(&v, &w)| p.flat[v as usize].coords * w)
+                .sum();
+            assert!(b.norm() < 1e-12, "{e:?}");
+        }
         let no_bend = Fabric {
             bend: [0.0, 0.0],
             ..Fabric::cotton()
         };
-        let q = build(&square(0.5), 0.05, &no_bend, &[]).unwrap();
+        let q = build(&square(0.5), 0.05, &no_bend, &Pins::default()).unwrap();
         assert!(
-            q.springs.iter().all(|s| s.kind != SpringKind::Bend),
+            q.bends.is_empty(),
             "no bend springs without bending rigidity"
         );
+    }
+
+    /// Bending energy of a piece whose flat positions are mapped by `f`.
+    fn bend_energy(p: &Piece, f: impl Fn(&Point2) -> Point3) -> f64 {
+        let x: Vec<Point3> = p.flat.iter().map(f).collect();
+        p.bends
+            .iter()
+            .map(|e| {
+                let b: crate::math::Vec3 = e
+                    .nodes
+                    .iter()
+                    .zip(&e.weights)
+                    .map(|(&v, &w)| x[v as usize].coords * w)
+                    .sum();
+                0.5 * e.c * b.norm_squared()
+            })
+            .sum()
+    }
+
+    #[test]
+    fn bending_energy_of_a_cylinder_is_b_kappa_squared_area_over_two() {
+        // A disc (grid inside, an irregular band at the rim) rolled onto cylinders about the
+        // weft and about the warp: the energy is B kappa^2 A / 2 with the warp's and the weft's
+        // rigidity, short of the rim strip half a spacing wide (the outline has no element).
+        let circle: Vec<Point2> = (0..48)
+            .map(|k| {
+                let t = std::f64::consts::TAU * k as f64 / 48.0;
+                Point2::new(0.2 * t.cos(), 0.2 * t.sin())
+            })
+            .collect();
+        let fabric = Fabric {
+            bend: [2e-5, 1e-5],
+            ..Fabric::cotton()
+        };
+        let h = 0.01;
+        let p = build(&circle, h, &fabric, &Pins::default()).unwrap();
+        let r = 0.15;
+        let roll_x =
+            |q: &Point2| Point3::new(r * (q.x / r).sin(), q.y, r * (1.0 - (q.x / r).cos()));
+        let roll_y =
+            |q: &Point2| Point3::new(q.x, r * (q.y / r).sin(), r * (1.0 - (q.y / r).cos()));
+        let inner = std::f64::consts::PI * (0.2 - 0.5 * h) * (0.2 - 0.5 * h);
+        for (f, b) in [
+            (&roll_x as &dyn Fn(&Point2) -> Point3, 2e-5),
+            (&roll_y, 1e-5),
+        ] {
+            let expected = b * inner / (2.0 * r * r);
+            let e = bend_energy(&p, f);
+            assert!((e / expected - 1.0).abs() < 0.05, "{e} against {expected}");
+        }
+        // A rigid motion stores nothing.
+        let moved =
+            |q: &Point2| Point3::new(0.3 + 0.6 * q.x - 0.8 * q.y, 0.8 * q.x + 0.6 * q.y, 1.0);
+        assert!(bend_energy(&p, moved) < 1e-20);
     }
 
     #[test]
@@ -596,15 +849,15 @@ mod tests {
             (0.0, 1.0),
         ]
         .map(|(x, y)| Point2::new(x, y));
-        let p = build(&l, 0.04, &Fabric::cotton(), &[]).unwrap();
+        let p = build(&l, 0.04, &Fabric::cotton(), &Pins::default()).unwrap();
         assert!((p.area - 0.51).abs() < 1e-12, "{}", p.area);
         let bow = [(0.0, 0.0), (1.0, 1.0), (1.0, 0.0), (0.0, 1.0)].map(|(x, y)| Point2::new(x, y));
         assert!(matches!(
-            build(&bow, 0.1, &Fabric::cotton(), &[]),
+            build(&bow, 0.1, &Fabric::cotton(), &Pins::default()),
             Err(PatternError::SelfIntersecting { .. })
         ));
         assert!(matches!(
-            build(&bow[..2], 0.1, &Fabric::cotton(), &[]),
+            build(&bow[..2], 0.1, &Fabric::cotton(), &Pins::default()),
             Err(PatternError::TooFewPoints { found: 2 })
         ));
         assert!(matches!(
@@ -612,7 +865,7 @@ mod tests {
                 &square(0.5),
                 0.1,
                 &Fabric::cotton(),
-                &[Point2::new(0.05, 0.56)]
+                &Pins::at(&[Point2::new(0.05, 0.56)])
             ),
             Err(PatternError::Pin { .. })
         ));

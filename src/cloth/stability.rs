@@ -19,7 +19,7 @@ use crate::math::{Point3, Vec3};
 /// The highest eigenfrequency (rad/s) of the springs at rest, by power iteration.
 pub fn max_frequency(model: &ClothModel, x: &[Point3]) -> f64 {
     let n = model.len();
-    if model.springs.is_empty() || n == 0 {
+    if (model.springs.is_empty() && model.bends() == 0) || n == 0 {
         return 0.0;
     }
     // A fixed pseudo-random start, orthogonal to nothing in particular.
@@ -54,6 +54,18 @@ pub fn max_frequency(model: &ClothModel, x: &[Point3]) -> f64 {
             let f = u * (s.k * u.dot(&rel));
             ky[s.a as usize] += f;
             ky[s.b as usize] -= f;
+        }
+        for e in 0..model.bends() {
+            let (lo, hi) = (
+                model.bend_start[e] as usize,
+                model.bend_start[e + 1] as usize,
+            );
+            let b = (lo..hi).fold(Vec3::zeros(), |acc, k| {
+                acc + y[model.bend_nodes[k] as usize] * model.bend_weights[k]
+            });
+            for k in lo..hi {
+                ky[model.bend_nodes[k] as usize] -= b * (model.bend_c[e] * model.bend_weights[k]);
+            }
         }
         // z = M^-1 K y (with K y = -ky as gathered above), pinned rows held at zero.
         let mut norm2 = 0.0;

@@ -1,0 +1,850 @@
+//! The drape simulator: the validation scenes of `fixtures/scenes/` with asserted outcomes,
+//! stability at the extremes, determinism, outputs, and bad scenes.
+
+mod common;
+
+use drapekit::cloth::fabric::Fabric;
+use drapekit::cloth::Integrator;
+use drapekit::math::{Point3, Vec3};
+use drapekit::scene::{self, Cells, Scene, Stop};
+use drapekit::sim::{self, SimError, World};
+use serde_json::Value;
+
+/// Reads a fixture scene and lets the test change it.
+fn scene_with(name: &str, edit: impl FnOnce(&mut Scene)) -> Scene {
+    let mut s = scene::read(&common::fixture(&format!("scenes/{name}"))).expect("a valid scene");
+    edit(&mut s);
+    s
+}
+
+/// Runs a world with the scene's solver settings.
+fn run_world(w: &mut World, sc: &Scene) -> Result<sim::RunStats, SimError> {
+    sim::run(
+        w,
+        sc.integrator,
+        sc.dt,
+        sc.stop,
+        None,
+        &mut |_, _| Ok(()),
+        &|_| {},
+    )
+}
+
+/// Runs a scene to its end: the world and the run's figures.
+fn simulate(sc: &Scene) -> (World, sim::RunStats) {
+    let mut w = sim::load(sc).expect("the scene loads");
+    let stats = run_world(&mut w, sc).expect("a stable run");
+    (w, stats)
+}
+
+/// The particle that is nearest to `p`.
+fn nearest(x: &[Point3], p: &Point3) -> usize {
+    (0..x.len())
+        .min_by(|&a, &b| (x[a] - p).norm().total_cmp(&(x[b] - p).norm()))
+        .unwrap()
+}
+
+/// Runs `drapekit drape SCENE -o OUT` with `extra` arguments.
+fn drape_cli(
+    scene: &std::path::Path,
+    out: &std::path::Path,
+    extra: &[&str],
+) -> std::process::Output {
+    let mut args = vec![
+        "drape",
+        scene.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    common::run(&args)
+}
+
+/// The ribbon scene, edited (`from`, `to` replacements, then `tail` appended), written to `dir`.
+fn ribbon_variant(dir: &std::path::Path, edits: &[(&str, &str)], tail: &str) -> std::path::PathBuf {
+    let mut text = std::fs::read_to_string(common::fixture("scenes/hanging_ribbon.toml")).unwrap();
+    for (from, to) in edits {
+        assert!(text.contains(from), "{from}");
+        text = text.replace(from, to);
+    }
+    let path = dir.join("ribbon.toml");
+    std::fs::write(&path, text + tail).unwrap();
+    path
+}
+
+/// The ribbon's stopping rule.
+const RIBBON_STOP: &str = "until_rest = 1e-9            # J\nmax_steps = 400000";
+
+/// A scratch directory, removed when dropped.
+fn scratch(name: &str) -> tempfile::TempDir {
+    tempfile::Builder::new()
+        .prefix(&format!("drapekit-drape-{name}-"))
+        .tempdir()
+        .unwrap()
+}
+
+// ---------------------------------------------------------------------------------------------
+// A square dropped on a sphere.
+
+#[test]
+fn square_dropped_on_a_sphere_rests_on_it_outside_radius_plus_thickness() {
+    let sc = scene_with("sphere_drop.toml", |_| {});
+    let (w, stats) = simulate(&sc);
+    assert!(
+        stats.at_rest,
+        "the cloth comes to rest ({} steps)",
+        stats.steps
+    );
+    let c = &w.colliders[0];
+    // The sphere is an icosphere of radius 0.3: its faces are at least r_in from the centre.
+    let r_in = (0..c.mesh.faces.len())
+        .map(|f| {
+            let [a, b, d] = c.mesh.corners(f);
+            let n = (b - a).cross(&(d - a)).normalize();
+            n.dot(&a.coords).abs()
+        })
+        .fold(f64::INFINITY, f64::min);
+    assert!(r_in > 0.298 && r_in < 0.3, "{r_in}");
+    let th = sc.pieces[0].fabric.thickness;
+    let closest = w
+        .state
+        .x
+        .iter()
+        .map(|p| p.coords.norm())
+        .fold(f64::INFINITY, f64::min);
+    assert!(
+        closest >= r_in + th - 1e-6,
+        "a particle is {closest} from the centre, within r_in + thickness = {}",
+        r_in + th
+    );
+    assert_eq!(sim::particles_inside(&w), vec![Some(0)]);
+    let clearance = sim::min_clearance(&w)[0];
+    assert!((clearance - th).abs() < 1e-6, "{clearance}");
+    // It lies on the sphere: the centre of the square on its top, many particles in contact.
+    let top = nearest(&w.state.x, &Point3::new(0.0, 0.0, 1.0));
+    assert!((w.state.x[top].coords.norm() - (0.3 + th)).abs() < 2e-3);
+    let contacts = w.state.contact.iter().filter(|c| c.is_some()).count();
+    assert!(contacts > 200, "{contacts}");
+    let (max, mean) = sim::strain(&w.model, &w.state.x);
+    assert!(max < 0.02 && mean.abs() < 0.005, "strain {max} {mean}");
+}
+
+// ---------------------------------------------------------------------------------------------
+// A ribbon hanging from its two ends: an elastic catenary.
+
+/// Irvine's elastic catenary (supports level, `span` apart): the horizontal tension and the
+/// midspan sag of a cable of unstretched length `l0`, weight `w` per unstretched length and
+/// axial stiffness `ea`.
+fn elastic_catenary(l0: f64, span: f64, w: f64, ea: f64) -> (f64, f64) {
+    let total = w * l0;
+    let span_of = |h: f64| h * l0 / ea + 2.0 * (h / w) * (total / (2.0 * h)).asinh();
+    let (mut lo, mut hi): (f64, f64) = (1e-9, 1e9);
+    for _ in 0..300 {
+        let mid = (lo * hi).sqrt();
+        if span_of(mid) > span {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    let h = (lo * hi).sqrt();
+    let sag = total * l0 / (8.0 * ea)
+        + (h * l0 / total) * ((1.0 + (total / (2.0 * h)).powi(2)).sqrt() - 1.0);
+    (h, sag)
+}
+
+/// Hangs the ribbon at `spacing` and `dt`: the midspan sag of its centre line (m), the
+/// horizontal and vertical reactions at one end (N), and the weight of its free particles (N).
+fn hang_ribbon(spacing: f64, dt: f64) -> (f64, f64, f64, f64, sim::RunStats) {
+    let sc = scene_with("hanging_ribbon.toml", |s| {
+        s.pieces[0].spacing = spacing;
+        s.dt = dt;
+    });
+    let w0 = sim::load(&sc).unwrap();
+    let mid = nearest(&w0.state.x, &Point3::new(0.0, 0.0, 1.0));
+    let z0 = w0.state.x[mid].z;
+    let (w, stats) = simulate(&sc);
+    let still = vec![Vec3::zeros(); w.model.len()];
+    let (mut rx, mut rz, mut weight) = (0.0, 0.0, 0.0);
+    for i in 0..w.model.len() {
+        if w.model.pinned(i) {
+            // The spring force on a pinned particle is what its clamp must hold.
+            let f = drapekit::cloth::forces::force_on(&w.model, &w.state.x, &still, i)
+                - w.model.gravity * w.model.mass[i];
+            if w.state.x[i].x < 0.0 {
+                rx += f.x;
+                rz += f.z;
+            }
+        } else {
+            weight += w.model.mass[i] * 9.81;
+        }
+    }
+    (z0 - w.state.x[mid].z, rx.abs(), rz.abs(), weight, stats)
+}
+
+#[test]
+fn ribbon_hanging_from_its_ends_sags_as_an_elastic_catenary() {
+    let f = scene_with("hanging_ribbon.toml", |_| {}).pieces[0]
+        .fabric
+        .clone();
+    let (e, g) = (f.stretch[0], f.shear);
+    let ea = e * (e + 2.0 * g) / (e + g); // the spring grid's tensile modulus, N/m
+    let (h, sag) = elastic_catenary(1.0, 1.0, f.density * 9.81, ea);
+    assert!((sag - 0.1042).abs() < 5e-4, "{sag}");
+    let mut errors = Vec::new();
+    for (spacing, dt, tol) in [(0.02, 4e-4, 0.02), (0.01, 2e-4, 0.005)] {
+        let (s, rx, rz, weight, stats) = hang_ribbon(spacing, dt);
+        assert!(stats.at_rest, "spacing {spacing}: at rest");
+        let err = (s - sag).abs() / sag;
+        assert!(
+            err < tol,
+            "spacing {spacing}: sag {s} against {sag} ({err:.4})"
+        );
+        // Statics: each clamp holds half the weight, and the catenary's horizontal tension
+        // across the ribbon's 4 cm.
+        assert!((2.0 * rz / weight - 1.0).abs() < 0.01, "{rz} {weight}");
+        assert!(
+            (rx / (h * 0.04) - 1.0).abs() < 0.03,
+            "{rx} against {}",
+            h * 0.04
+        );
+        errors.push(err);
+    }
+    assert!(
+        errors[1] < errors[0],
+        "the error falls as the spacing halves: {errors:?}"
+    );
+    // The static answer does not depend on the step.
+    let (fine, ..) = hang_ribbon(0.02, 1e-4);
+    let (coarse, ..) = hang_ribbon(0.02, 4e-4);
+    assert!((fine - coarse).abs() < 2e-4, "{fine} {coarse}");
+}
+
+// ---------------------------------------------------------------------------------------------
+// The Cusick drape test.
+
+fn cusick(preset: &str) -> (f64, World) {
+    let sc = scene_with("cusick.toml", |s| {
+        s.pieces[0].fabric = Fabric {
+            stretch: [1000.0, 1000.0],
+            damping: 2.0,
+            ..Fabric::preset(preset).unwrap()
+        };
+    });
+    let (w, stats) = simulate(&sc);
+    assert!(stats.at_rest, "{preset} comes to rest");
+    (sim::drape_coefficient(&w, 0, 0.09), w)
+}
+
+#[test]
+fn cusick_drape_coefficient_rises_with_bending_rigidity() {
+    let mut last = 0.0;
+    for preset in ["silk", "cotton", "denim"] {
+        let (dc, w) = cusick(preset);
+        assert!(dc > 0.2 && dc < 0.95, "{preset}: {dc}");
+        assert!(dc > last, "{preset}: {dc} after {last}");
+        assert_eq!(sim::particles_inside(&w), vec![Some(0)]);
+        // The specimen hangs over the rim: its edge is well below the disc's top.
+        let low = w.state.x.iter().map(|p| p.z).fold(f64::INFINITY, f64::min);
+        assert!(low < -0.02, "{preset}: lowest point {low}");
+        last = dc;
+    }
+}
+
+#[test]
+fn drape_coefficient_of_flat_and_hanging_specimens() {
+    // Flat: the shadow is the specimen (coefficient 1); hanging straight down from the disc's
+    // rim (a cylinder of the disc's radius), the shadow is the disc (coefficient 0).
+    let sc = scene_with("cusick.toml", |_| {});
+    let mut w = sim::load(&sc).unwrap();
+    let dc = sim::drape_coefficient(&w, 0, 0.09);
+    assert!((dc - 1.0).abs() < 0.01, "{dc}");
+    for p in w.state.x.iter_mut() {
+        let r = p.coords.xy().norm();
+        if r > 0.09 {
+            let s = 0.09 / r;
+            *p = Point3::new(p.x * s, p.y * s, -(r - 0.09));
+        }
+    }
+    let dc = sim::drape_coefficient(&w, 0, 0.09);
+    assert!(dc.abs() < 0.02, "{dc}");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Real objects: an open seat and a closed body.
+
+/// The highest point of `c`'s surface on the vertical line through `p` (`None`: no surface).
+fn surface_above(c: &drapekit::collide::Collider, p: &Point3) -> Option<f64> {
+    let mut top: Option<f64> = None;
+    for f in 0..c.mesh.faces.len() {
+        let [a, b, d] = c.mesh.corners(f);
+        let det = (b.x - a.x) * (d.y - a.y) - (d.x - a.x) * (b.y - a.y);
+        if det.abs() < 1e-18 {
+            continue;
+        }
+        let u = ((p.x - a.x) * (d.y - a.y) - (d.x - a.x) * (p.y - a.y)) / det;
+        let v = ((b.x - a.x) * (p.y - a.y) - (p.x - a.x) * (b.y - a.y)) / det;
+        if u >= 0.0 && v >= 0.0 && u + v <= 1.0 {
+            let z = a.z + u * (b.z - a.z) + v * (d.z - a.z);
+            top = Some(top.map_or(z, |t: f64| t.max(z)));
+        }
+    }
+    top
+}
+
+#[test]
+fn cloth_dropped_on_the_open_stool_stays_above_its_top_surface() {
+    if common::realdata().is_none() {
+        return;
+    }
+    let sc = scene_with("stool.toml", |_| {});
+    let (w, stats) = simulate(&sc);
+    assert!(stats.at_rest);
+    let c = &w.colliders[0];
+    assert!(!c.closed, "the stool is an open mesh");
+    let th = sc.pieces[0].fabric.thickness;
+    let mut over = 0;
+    for (i, p) in w.state.x.iter().enumerate() {
+        if let Some(top) = surface_above(c, p) {
+            over += 1;
+            assert!(
+                p.z >= top + th - 1e-6,
+                "particle {i} at {p:?} is below the stool's top surface ({top}) plus the thickness"
+            );
+        }
+    }
+    assert!(over > 500, "{over} particles rest over the stool");
+    assert!(sim::min_clearance(&w)[0] >= th - 1e-6);
+}
+
+#[test]
+fn cape_dropped_over_the_shoulders_stays_outside_the_body() {
+    if common::realdata().is_none() {
+        return;
+    }
+    let sc = scene_with("shoulders.toml", |_| {});
+    let (w, stats) = simulate(&sc);
+    assert!(stats.at_rest);
+    assert!(w.colliders[0].closed, "the body is closed");
+    assert_eq!(sim::particles_inside(&w), vec![Some(0)]);
+    let th = sc.pieces[0].fabric.thickness;
+    let clearance = sim::min_clearance(&w)[0];
+    assert!(clearance >= th - 1e-6, "{clearance}");
+    // It rests on the shoulders: nothing fell off, many particles touch the body.
+    let low = w.state.x.iter().map(|p| p.z).fold(f64::INFINITY, f64::min);
+    assert!(low > 0.2, "lowest particle at {low}");
+    assert!(w.state.contact.iter().filter(|c| c.is_some()).count() > 100);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Stability: the boundary against the estimate, and the extremes of stiffness and step.
+
+/// A 20 cm square of `fabric`, spacing 2 cm, pinned at two corners, hanging free.
+fn probe_world(fabric: &Fabric, integrator: Integrator) -> World {
+    use drapekit::cloth::model::ClothModel;
+    use drapekit::cloth::pattern::{self, Pins};
+    use drapekit::math::Point2;
+    let s = 0.1;
+    let outline = [(-s, -s), (s, -s), (s, s), (-s, s)].map(|(x, y)| Point2::new(x, y));
+    let pins = Pins::at(&[Point2::new(-s, s), Point2::new(s, s)]);
+    let p = pattern::build(&outline, 0.02, fabric, &pins).unwrap();
+    let placed: Vec<Point3> = p.flat.iter().map(|q| Point3::new(q.x, 0.0, q.y)).collect();
+    let (m, x) = ClothModel::assemble(
+        &[("probe".into(), p, fabric.clone(), placed)],
+        Vec3::new(0.0, 0.0, -9.81),
+    );
+    World::new(m, x, Vec::new(), integrator)
+}
+
+fn probe_run(
+    fabric: &Fabric,
+    integrator: Integrator,
+    dt: f64,
+    steps: u64,
+) -> Result<World, SimError> {
+    let mut w = probe_world(fabric, integrator);
+    sim::run(
+        &mut w,
+        integrator,
+        dt,
+        Stop::Steps(steps),
+        None,
+        &mut |_, _| Ok(()),
+        &|_| {},
+    )?;
+    Ok(w)
+}
+
+fn stiffness(k: f64, damping: f64) -> Fabric {
+    Fabric {
+        stretch: [k, k],
+        shear: 0.1 * k,
+        bend: [0.0, 0.0],
+        damping,
+        ..Fabric::cotton()
+    }
+}
+
+#[test]
+fn leapfrog_is_stable_below_the_estimate_and_caught_above_it() {
+    for k in [1.0, 1e2, 1e4, 1e6] {
+        let f = stiffness(k, 0.5);
+        let est = probe_world(&f, Integrator::Leapfrog).stable_step;
+        assert!(est.is_finite() && est > 0.0);
+        let steps = 2000;
+        let w = probe_run(&f, Integrator::Leapfrog, 0.8 * est, steps)
+            .unwrap_or_else(|e| panic!("k = {k}: 0.8 x the estimate must be stable: {e}"));
+        assert!(w.state.x.iter().all(|p| p.iter().all(|c| c.is_finite())));
+        match probe_run(&f, Integrator::Leapfrog, 1.25 * est, steps) {
+            Ok(_) => panic!("k = {k}: 1.25 x the estimate ({est:e}) must go unstable"),
+            Err(SimError::Unstable {
+                estimate, step, dt, ..
+            }) => {
+                assert_eq!(estimate, est);
+                assert_eq!(dt, 1.25 * est);
+                assert!(step <= steps);
+            }
+            Err(e) => panic!("{e}"),
+        }
+    }
+}
+
+#[test]
+fn extremes_of_stiffness_and_step_are_either_stable_or_caught_as_the_estimate_says() {
+    for k in [1.0, 1e6] {
+        for dt in [1e-6, 1.0 / 30.0] {
+            let f = stiffness(k, 0.5);
+            let est = probe_world(&f, Integrator::Leapfrog).stable_step;
+            let steps = if dt < 1e-5 { 3000 } else { 300 };
+            let r = probe_run(&f, Integrator::Leapfrog, dt, steps);
+            if dt < 0.8 * est {
+                let w = r.unwrap_or_else(|e| panic!("k {k} dt {dt}: {e}"));
+                assert!(w.state.x.iter().all(|p| p.iter().all(|c| c.is_finite())));
+            } else {
+                let e = r
+                    .err()
+                    .unwrap_or_else(|| panic!("k {k} dt {dt} est {est}: must be caught"));
+                let msg = e.to_string();
+                assert!(msg.contains("largest stable step"), "{msg}");
+                assert!(msg.contains("use dt <="), "{msg}");
+            }
+        }
+    }
+    // The corner cases the issue names, by the estimate: soft and slow is stable, stiff and slow
+    // is not; stiff and fast is stable.
+    let soft = probe_world(&stiffness(1.0, 0.5), Integrator::Leapfrog).stable_step;
+    let stiff = probe_world(&stiffness(1e6, 0.5), Integrator::Leapfrog).stable_step;
+    assert!(soft > 1e-3 && soft < 1.0 / 30.0, "{soft}");
+    assert!(stiff > 1e-6 && stiff < 1e-4, "{stiff}");
+}
+
+#[test]
+fn explicit_euler_needs_damping_and_a_step_below_its_estimate() {
+    // Soft, heavily damped: explicit Euler is stable below c / (c^2/4 + w^2), and not above.
+    let f = stiffness(1.0, 40.0);
+    let w = probe_world(&f, Integrator::ExplicitEuler);
+    let est = w.stable_step;
+    assert!((est - 40.0 / (400.0 + w.max_frequency.powi(2))).abs() < 1e-15);
+    assert!(probe_run(&f, Integrator::ExplicitEuler, 0.5 * est, 3000).is_ok());
+    assert!(matches!(
+        probe_run(&f, Integrator::ExplicitEuler, 3.0 * est, 3000),
+        Err(SimError::Unstable { .. })
+    ));
+    // Without damping it has no stable step.
+    let undamped = probe_world(&stiffness(1.0, 0.0), Integrator::ExplicitEuler);
+    assert_eq!(undamped.stable_step, 0.0);
+}
+
+#[test]
+fn an_unstable_scene_stops_with_advice_and_leaves_nothing_behind() {
+    let tmp = scratch("unstable");
+    let dir = tmp.path();
+    let scene = ribbon_variant(
+        dir,
+        &[("dt = 2e-4", "dt = 0.02"), (RIBBON_STOP, "steps = 2000")],
+        "\n[output]\nframes = 1\nply = true\n",
+    );
+    let out = dir.join("out");
+    let o = drape_cli(&scene, &out, &[]);
+    let (_, err) = common::text(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    for needle in [
+        "went unstable at step",
+        "largest stable step estimated",
+        "use dt <=",
+    ] {
+        assert!(err.contains(needle), "{needle}: {err}");
+    }
+    assert!(
+        !out.exists(),
+        "no output after an unstable run: {:?}",
+        common::listing(dir)
+    );
+}
+
+// ---------------------------------------------------------------------------------------------
+// Determinism and modelling only what a scene needs.
+
+fn run_in_pool(threads: usize, sc: &Scene) -> World {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap()
+        .install(|| simulate(sc).0)
+}
+
+#[test]
+fn results_are_identical_with_one_or_two_threads() {
+    // 6,561 particles: above the size from which the step runs in parallel.
+    let sc = scene_with("sphere_drop.toml", |s| {
+        s.pieces[0].spacing = 0.01;
+        s.dt = 5e-5;
+        s.stop = Stop::Steps(1600);
+    });
+    assert!(sim::load(&sc).unwrap().model.len() >= sim::PARALLEL_MIN);
+    let one = run_in_pool(1, &sc);
+    let two = run_in_pool(2, &sc);
+    assert!(
+        one.state.contact.iter().any(|c| c.is_some()),
+        "the cloth reached the sphere"
+    );
+    assert_eq!(one.state.x, two.state.x);
+    assert_eq!(one.state.v, two.state.v);
+}
+
+#[test]
+fn the_grid_changes_the_speed_never_the_result() {
+    let run = |cells: Cells| {
+        let sc = scene_with("sphere_drop.toml", |s| {
+            s.cells = cells;
+            s.stop = Stop::Steps(1500);
+        });
+        simulate(&sc).0
+    };
+    let auto = run(Cells::Auto);
+    assert!(auto.state.contact.iter().filter(|c| c.is_some()).count() > 50);
+    for cells in [[2, 3, 2], [5, 5, 5], [40, 40, 40]] {
+        let w = run(Cells::Fixed(cells));
+        assert_eq!(w.state.x, auto.state.x, "cells {cells:?}");
+    }
+}
+
+#[test]
+fn an_object_out_of_reach_gets_no_grid_and_changes_nothing() {
+    let base = scene_with("sphere_drop.toml", |s| s.stop = Stop::Steps(1500));
+    let with_far = scene_with("sphere_drop.toml", |s| {
+        s.stop = Stop::Steps(1500);
+        let mut far = s.objects[0].clone();
+        far.name = "far".into();
+        far.translate = Vec3::new(5.0, 0.0, 0.0);
+        s.objects.push(far);
+    });
+    let (a, _) = simulate(&base);
+    let (b, _) = simulate(&with_far);
+    assert_eq!(b.grid_built_at[1], None, "no grid over the far sphere");
+    assert!(b.grid_built_at[0].is_some());
+    assert_eq!(a.state.x, b.state.x);
+}
+
+#[test]
+fn lengths_in_centimetres_give_the_same_drape() {
+    let m = scene_with("hanging_ribbon.toml", |s| {
+        s.pieces[0].spacing = 0.02;
+        s.dt = 4e-4;
+        s.stop = Stop::Steps(400);
+    });
+    let tmp = scratch("units");
+    let dir = tmp.path();
+    let text = std::fs::read_to_string(common::fixture("scenes/hanging_ribbon.toml")).unwrap();
+    let cm = text
+        .replace("units = \"m\"", "units = \"cm\"")
+        .replace(
+            "outline = [[-0.5, -0.02], [0.5, -0.02], [0.5, 0.02], [-0.5, 0.02]]",
+            "outline = [[-50, -2], [50, -2], [50, 2], [-50, 2]]",
+        )
+        .replace("spacing = 0.01", "spacing = 2")
+        .replace("position = [0.0, 0.0, 1.0]", "position = [0, 0, 100]")
+        .replace(
+            "pin_segments = [[[-0.5, -0.02], [-0.5, 0.02]], [[0.5, -0.02], [0.5, 0.02]]]",
+            "pin_segments = [[[-50, -2], [-50, 2]], [[50, -2], [50, 2]]]",
+        );
+    std::fs::write(dir.join("cm.toml"), cm).unwrap();
+    let mut c = scene::read(&dir.join("cm.toml")).unwrap();
+    c.dt = 4e-4;
+    c.stop = Stop::Steps(400);
+    assert_eq!(c.pieces[0].spacing, 0.02);
+    assert!((c.gravity - m.gravity).norm() < 1e-12);
+    let (a, _) = simulate(&m);
+    let (b, _) = simulate(&c);
+    let worst = a
+        .state
+        .x
+        .iter()
+        .zip(&b.state.x)
+        .map(|(p, q)| (p - q).norm())
+        .fold(0.0, f64::max);
+    assert!(worst < 1e-9, "{worst}");
+}
+
+// ---------------------------------------------------------------------------------------------
+// The command: outputs, frames, report.
+
+#[test]
+fn drape_writes_pieces_frames_and_a_report_of_finite_numbers() {
+    let tmp = scratch("outputs");
+    let dir = tmp.path();
+    let scene = ribbon_variant(
+        dir,
+        &[
+            ("spacing = 0.01", "spacing = 0.02"),
+            ("dt = 2e-4", "dt = 4e-4"),
+            (RIBBON_STOP, "steps = 1000"),
+        ],
+        "\n[output]\nframes = 250\nply = true\n",
+    );
+    let out = dir.join("out");
+    let report = dir.join("r.json");
+    let o = drape_cli(&scene, &out, &["--report", report.to_str().unwrap()]);
+    let (stdout, err) = common::text(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        stdout.contains("particles") && stdout.contains("strain"),
+        "{stdout}"
+    );
+    assert_eq!(
+        common::listing(&out),
+        ["frames", "ribbon.obj", "ribbon.ply"]
+    );
+    assert_eq!(
+        common::listing(&out.join("frames")),
+        [
+            "ribbon_0000250.obj",
+            "ribbon_0000500.obj",
+            "ribbon_0000750.obj",
+            "ribbon_0001000.obj"
+        ]
+    );
+    let r: Value = serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    for key in [
+        "particles",
+        "springs",
+        "object_faces",
+        "cells",
+        "steps",
+        "dt",
+        "wall_seconds",
+        "collision_seconds",
+        "contacts_end",
+        "particles_inside",
+        "min_clearance",
+        "max_strain",
+        "mean_strain",
+        "kinetic_energy_end",
+        "finite",
+    ] {
+        assert!(r.get(key).is_some(), "{key} in the report");
+    }
+    assert_eq!(r["steps"], 1000);
+    assert_eq!(r["finite"], true);
+    assert_eq!(r["object_faces"], 0);
+    let n = r["particles"].as_u64().unwrap() as usize;
+    for f in ["ribbon.obj", "ribbon.ply", "frames/ribbon_0000500.obj"] {
+        let m = drapekit::io::read_mesh(&out.join(f), &Default::default())
+            .unwrap()
+            .mesh;
+        assert_eq!(m.positions.len(), n, "{f}");
+        assert!(m.positions.iter().all(|p| p.iter().all(|c| c.is_finite())));
+        assert_eq!(
+            m.faces.len(),
+            r["pieces"][0]["triangles"].as_u64().unwrap() as usize
+        );
+    }
+    // The clamped ends have not moved; the middle has sagged.
+    let m = drapekit::io::read_mesh(&out.join("ribbon.obj"), &Default::default())
+        .unwrap()
+        .mesh;
+    let lowest = m
+        .positions
+        .iter()
+        .map(|p| p.z)
+        .fold(f64::INFINITY, f64::min);
+    assert!(lowest < 0.99, "{lowest}");
+    assert!(m
+        .positions
+        .iter()
+        .any(|p| (p - Point3::new(-0.5, 0.0, 1.0)).norm() < 1e-12));
+    // The JSON summary is the report.
+    let o = drape_cli(&scene, &out, &["--json"]);
+    let j: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(j["particles"], r["particles"]);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Bad scenes.
+
+/// Runs `drape` on a scene text written to a scratch directory beside a copy of the sphere
+/// mesh; asserts exit code 1, that stderr names the file and contains each needle, and that no
+/// output was created.
+fn refused(name: &str, text: &str, needles: &[&str]) {
+    let tmp = scratch(&format!("bad-{name}"));
+    let dir = tmp.path();
+    std::fs::copy(
+        common::fixture("scenes/sphere_r0.3.obj"),
+        dir.join("sphere_r0.3.obj"),
+    )
+    .unwrap();
+    let scene = dir.join(format!("{name}.toml"));
+    std::fs::write(&scene, text).unwrap();
+    let out = dir.join("out");
+    let o = drape_cli(&scene, &out, &[]);
+    let (_, err) = common::text(&o);
+    assert_eq!(o.status.code(), Some(1), "{name}: {err}");
+    assert!(
+        err.contains(&format!("{name}.toml")),
+        "{name}: names the file: {err}"
+    );
+    for n in needles {
+        assert!(err.contains(n), "{name}: '{n}' in: {err}");
+    }
+    assert!(!out.exists(), "{name}: nothing written");
+}
+
+const GOOD: &str = r#"units = "m"
+[solver]
+dt = 1e-4
+steps = 10
+[[object]]
+mesh = "sphere_r0.3.obj"
+[[piece]]
+outline = [[-0.4, -0.4], [0.4, -0.4], [0.4, 0.4], [-0.4, 0.4]]
+spacing = 0.05
+position = [0.0, 0.0, 0.4]
+fabric = "cotton"
+"#;
+
+#[test]
+fn the_good_scene_of_the_bad_scene_tests_runs() {
+    let tmp = scratch("good");
+    let dir = tmp.path();
+    std::fs::copy(
+        common::fixture("scenes/sphere_r0.3.obj"),
+        dir.join("sphere_r0.3.obj"),
+    )
+    .unwrap();
+    std::fs::write(dir.join("good.toml"), GOOD).unwrap();
+    let o = drape_cli(&dir.join("good.toml"), &dir.join("out"), &[]);
+    assert!(o.status.success(), "{}", common::text(&o).1);
+}
+
+#[test]
+fn bad_scenes_are_refused_naming_the_file_and_the_key() {
+    refused(
+        "missing_mesh",
+        &GOOD.replace("sphere_r0.3.obj", "nowhere.obj"),
+        &["object[1].mesh", "nowhere.obj", "does not exist"],
+    );
+    refused(
+        "self_intersecting",
+        &GOOD.replace(
+            "[[-0.4, -0.4], [0.4, -0.4], [0.4, 0.4], [-0.4, 0.4]]",
+            "[[-0.4, -0.4], [0.4, 0.4], [0.4, -0.4], [-0.4, 0.4]]",
+        ),
+        &["piece[1].outline", "intersects itself"],
+    );
+    refused(
+        "two_points",
+        &GOOD.replace(
+            "[[-0.4, -0.4], [0.4, -0.4], [0.4, 0.4], [-0.4, 0.4]]",
+            "[[0, 0], [1, 0]]",
+        ),
+        &["piece[1].outline", "at least 3 points"],
+    );
+    refused(
+        "negative_density",
+        &(GOOD.replace("fabric = \"cotton\"", "fabric = \"thin\"")
+            + "[fabric.thin]\nbase = \"cotton\"\ndensity = -0.1\n"),
+        &["fabric.thin.density", "positive"],
+    );
+    refused(
+        "negative_step",
+        &GOOD.replace("dt = 1e-4", "dt = -1e-4"),
+        &["solver.dt", "positive"],
+    );
+    refused(
+        "unknown_key",
+        &GOOD.replace("spacing = 0.05", "spacing = 0.05\ncolour = \"red\""),
+        &["unknown field `colour`"],
+    );
+    refused(
+        "unknown_preset",
+        &GOOD.replace("fabric = \"cotton\"", "fabric = \"velvet\""),
+        &["piece[1].fabric", "unknown fabric 'velvet'", "cotton"],
+    );
+    refused(
+        "unknown_unit",
+        &GOOD.replace("units = \"m\"", "units = \"ft\""),
+        &["units", "'ft'"],
+    );
+    refused(
+        "pin_off_the_cloth",
+        &GOOD.replace(
+            "fabric = \"cotton\"",
+            "fabric = \"cotton\"\npin = [[0.0, 0.9]]",
+        ),
+        &["piece[1].outline", "pin 1"],
+    );
+    refused(
+        "no_stop",
+        &GOOD.replace("steps = 10", ""),
+        &["solver", "exactly one of steps, duration or until_rest"],
+    );
+    refused(
+        "bad_cells",
+        &(GOOD.to_string() + "[collision]\ncells = [0, 5, 5]\n"),
+        &["collision.cells", "1..4096"],
+    );
+}
+
+#[test]
+fn a_mesh_that_is_not_a_surface_is_refused() {
+    // Every face degenerate: nothing to collide with after cleaning.
+    let tmp = scratch("flat-mesh");
+    let dir = tmp.path();
+    std::fs::write(
+        dir.join("line.obj"),
+        "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 3 0 0\nf 1 2 3\nf 2 3 4\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("flat.toml"),
+        GOOD.replace("sphere_r0.3.obj", "line.obj"),
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let o = drape_cli(&dir.join("flat.toml"), &out, &[]);
+    let (_, err) = common::text(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    for n in ["flat.toml", "object[1].mesh", "no faces remain"] {
+        assert!(err.contains(n), "{n}: {err}");
+    }
+    assert!(!out.exists());
+    // A mesh file that does not parse names its own line.
+    std::fs::write(
+        dir.join("broken.obj"),
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("broken.toml"),
+        GOOD.replace("sphere_r0.3.obj", "broken.obj"),
+    )
+    .unwrap();
+    let o = drape_cli(&dir.join("broken.toml"), &out, &[]);
+    let (_, err) = common::text(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("broken.obj:4:") && err.contains("out of range"),
+        "{err}"
+    );
+    assert!(!out.exists());
+}
