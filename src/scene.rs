@@ -64,6 +64,12 @@ pub enum SceneError {
         key: String,
         message: String,
     },
+    /// Several values that cannot be: (key, message) each.
+    #[error("{}: {} problems:{}", path.display(), problems.len(), problems.iter().map(|(k, m)| format!("\n  key '{k}': {m}")).collect::<String>())]
+    Many {
+        path: PathBuf,
+        problems: Vec<(String, String)>,
+    },
     /// An object's mesh (the mesh's own error, which names its file and line).
     #[error("{}: key '{key}': {error}", path.display())]
     Mesh {
@@ -78,6 +84,30 @@ pub enum SceneError {
         key: String,
         error: crate::cloth::pattern::PatternError,
     },
+}
+
+impl SceneError {
+    /// One error for several: the error itself when alone, else [`SceneError::Many`] with each
+    /// one's key and message.
+    pub fn combine(path: &Path, mut errors: Vec<SceneError>) -> SceneError {
+        if errors.len() == 1 {
+            return errors.remove(0);
+        }
+        let problems = errors
+            .into_iter()
+            .flat_map(|e| match e {
+                SceneError::Key { key, message, .. } => vec![(key, message)],
+                SceneError::Mesh { key, error, .. } => vec![(key, error.to_string())],
+                SceneError::Piece { key, error, .. } => vec![(key, error.to_string())],
+                SceneError::Many { problems, .. } => problems,
+                other => vec![(String::new(), other.to_string())],
+            })
+            .collect();
+        SceneError::Many {
+            path: path.to_path_buf(),
+            problems,
+        }
+    }
 }
 
 #[derive(Deserialize)]
@@ -286,7 +316,9 @@ pub struct Scene {
     pub disc_radius: Option<f64>,
 }
 
-/// Reads and validates a scene file (meshes are checked to exist, not read).
+/// Reads and validates a scene file (meshes are checked to exist, not read). Every problem of
+/// the file is reported, not only the first: one is [`SceneError::Key`], several are
+/// [`SceneError::Many`].
 pub fn read(path: &Path) -> Result<Scene, SceneError> {
     let text = std::fs::read_to_string(path).map_err(|source| SceneError::Read {
         path: path.to_path_buf(),
@@ -296,39 +328,34 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
         path: path.to_path_buf(),
         message: e.to_string().trim_end().to_string(),
     })?;
-    let key = |k: &str, m: String| SceneError::Key {
-        path: path.to_path_buf(),
-        key: k.to_string(),
-        message: m,
+    let problems = std::cell::RefCell::new(Vec::<(String, String)>::new());
+    // Records a problem with a key; validation goes on with a stand-in value.
+    let bad = |k: &str, m: String| problems.borrow_mut().push((k.to_string(), m));
+    let finite = |k: &str, v: &[f64]| {
+        if !v.iter().all(|x| x.is_finite()) {
+            bad(k, "must be finite numbers".into());
+        }
+    };
+    let positive = |k: &str, v: f64, stand_in: f64| -> f64 {
+        if v.is_finite() && v > 0.0 {
+            v
+        } else {
+            bad(k, format!("must be a positive number, got {v}"));
+            stand_in
+        }
     };
     let units: Units = match f.units.as_deref() {
         None => Units::M,
         Some(u @ ("m" | "cm" | "mm")) => u.parse().unwrap(),
         Some(u) => {
-            return Err(key(
-                "units",
-                format!("unknown unit '{u}': expected m, cm or mm"),
-            ))
+            bad("units", format!("unknown unit '{u}': expected m, cm or mm"));
+            Units::M
         }
     };
     let to_m = Units::factor(units, Units::M);
-    let finite = |k: &str, v: &[f64]| -> Result<(), SceneError> {
-        if v.iter().all(|x| x.is_finite()) {
-            Ok(())
-        } else {
-            Err(key(k, "must be finite numbers".into()))
-        }
-    };
-    let positive = |k: &str, v: f64| -> Result<f64, SceneError> {
-        if v.is_finite() && v > 0.0 {
-            Ok(v)
-        } else {
-            Err(key(k, format!("must be a positive number, got {v}")))
-        }
-    };
     let gravity = match f.gravity {
         Some(g) => {
-            finite("gravity", &g)?;
+            finite("gravity", &g);
             Vec3::from(g) * to_m
         }
         None => Vec3::new(0.0, 0.0, -9.81),
@@ -339,21 +366,28 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
         .as_deref()
         .unwrap_or("leapfrog")
         .parse()
-        .map_err(|m| key("solver.integrator", m))?;
-    let dt = positive("solver.dt", f.solver.dt)?;
+        .unwrap_or_else(|m| {
+            bad("solver.integrator", m);
+            Integrator::Leapfrog
+        });
+    let dt = positive("solver.dt", f.solver.dt, 1e-4);
     let s = &f.solver;
     let stop = match (s.steps, s.duration, s.until_rest) {
-        (Some(n), None, None) if n > 0 => Stop::Steps(n),
-        (Some(_), None, None) => return Err(key("solver.steps", "must be at least 1".into())),
+        (Some(n), None, None) => {
+            if n == 0 {
+                bad("solver.steps", "must be at least 1".into());
+            }
+            Stop::Steps(n.max(1))
+        }
         (None, Some(t), None) => {
-            Stop::Steps((positive("solver.duration", t)? / dt).round().max(1.0) as u64)
+            Stop::Steps((positive("solver.duration", t, dt) / dt).round().max(1.0) as u64)
         }
         (None, None, Some(e)) => {
             if !(e.is_finite() && e >= 0.0) {
-                return Err(key(
+                bad(
                     "solver.until_rest",
                     format!("must be a kinetic energy >= 0 (J), got {e}"),
-                ));
+                );
             }
             Stop::UntilRest {
                 energy: e,
@@ -361,30 +395,33 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
             }
         }
         _ => {
-            return Err(key(
+            bad(
                 "solver",
                 "give exactly one of steps, duration or until_rest".into(),
-            ))
+            );
+            Stop::Steps(1)
         }
     };
-    if s.max_steps.is_some() && !matches!(stop, Stop::UntilRest { .. }) {
-        return Err(key("solver.max_steps", "goes with until_rest".into()));
+    if s.max_steps.is_some() && s.until_rest.is_none() {
+        bad("solver.max_steps", "goes with until_rest".into());
     }
     let cells = match f.collision.and_then(|c| c.cells) {
         None => Cells::Auto,
         Some(CellsFile::Word(w)) if w == "auto" => Cells::Auto,
         Some(CellsFile::Word(w)) => {
-            return Err(key(
+            bad(
                 "collision.cells",
                 format!("'{w}' is neither \"auto\" nor [nx, ny, nz]"),
-            ))
+            );
+            Cells::Auto
         }
         Some(CellsFile::Dims(d)) if d.iter().all(|&n| (1..=4096).contains(&n)) => Cells::Fixed(d),
         Some(CellsFile::Dims(d)) => {
-            return Err(key(
+            bad(
                 "collision.cells",
                 format!("{d:?}: each count must be within 1..4096"),
-            ))
+            );
+            Cells::Auto
         }
     };
     let dir = path.parent().unwrap_or(Path::new("."));
@@ -393,25 +430,18 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
         let k = |field: &str| format!("object[{}].{field}", i + 1);
         let mesh = dir.join(&o.mesh);
         if !mesh.is_file() {
-            return Err(key(
-                &k("mesh"),
-                format!("{} does not exist", mesh.display()),
-            ));
+            bad(&k("mesh"), format!("{} does not exist", mesh.display()));
         }
-        let up: Up =
-            o.up.as_deref()
-                .unwrap_or("z")
-                .parse()
-                .map_err(|m| key(&k("up"), m))?;
-        let scale = positive(&k("scale"), o.scale.unwrap_or(1.0))?;
+        let up: Up = o.up.as_deref().unwrap_or("z").parse().unwrap_or_else(|m| {
+            bad(&k("up"), m);
+            Up::Z
+        });
+        let scale = positive(&k("scale"), o.scale.unwrap_or(1.0), 1.0);
         let translate = o.translate.unwrap_or([0.0; 3]);
-        finite(&k("translate"), &translate)?;
+        finite(&k("translate"), &translate);
         if let Some(fr) = o.friction {
             if !(0.0..=1.0).contains(&fr) {
-                return Err(key(
-                    &k("friction"),
-                    format!("must be within 0..1, got {fr}"),
-                ));
+                bad(&k("friction"), format!("must be within 0..1, got {fr}"));
             }
         }
         let name = o.name.clone().unwrap_or_else(|| {
@@ -434,14 +464,16 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
         let k = |field: &str| format!("fabric.{name}.{field}");
         let mut fab = match (&t.base, &t.kes) {
             (Some(_), Some(_)) => {
-                return Err(key(
+                bad(
                     &format!("fabric.{name}"),
                     "give base or kes, not both".into(),
-                ))
+                );
+                Fabric::cotton()
             }
-            (Some(b), None) => {
-                Fabric::preset(b).ok_or_else(|| key(&k("base"), unknown_preset(b)))?
-            }
+            (Some(b), None) => Fabric::preset(b).unwrap_or_else(|| {
+                bad(&k("base"), unknown_preset(b));
+                Fabric::cotton()
+            }),
             (None, Some(kes)) => Fabric::from_kes(
                 &Kes {
                     w: kes.w,
@@ -456,26 +488,26 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
             (None, None) => Fabric::cotton(),
         };
         let full = t.base.is_some() || t.kes.is_some();
-        let need = |v: Option<f64>, field: &str| -> Result<Option<f64>, SceneError> {
+        let need = |v: Option<f64>, field: &str| {
             if v.is_none() && !full {
-                return Err(key(
+                bad(
                     &k(field),
                     "is required (or start from a preset with base = \"...\")".into(),
-                ));
+                );
             }
-            Ok(v)
+            v
         };
-        if let Some(v) = need(t.density, "density")? {
+        if let Some(v) = need(t.density, "density") {
             fab.density = v;
         }
-        if let Some(v) = need(t.stretch.map(|p| p.get()[0]), "stretch")? {
-            fab.stretch = t.stretch.map(|p| p.get()).unwrap_or([v, v]);
+        if need(t.stretch.map(|p| p.get()[0]), "stretch").is_some() {
+            fab.stretch = t.stretch.map(|p| p.get()).unwrap_or(fab.stretch);
         }
-        if let Some(v) = need(t.shear, "shear")? {
+        if let Some(v) = need(t.shear, "shear") {
             fab.shear = v;
         }
-        if let Some(v) = need(t.bend.map(|p| p.get()[0]), "bend")? {
-            fab.bend = t.bend.map(|p| p.get()).unwrap_or([v, v]);
+        if need(t.bend.map(|p| p.get()[0]), "bend").is_some() {
+            fab.bend = t.bend.map(|p| p.get()).unwrap_or(fab.bend);
         }
         if let Some(v) = t.damping {
             fab.damping = v;
@@ -486,51 +518,53 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
         if let Some(v) = t.friction {
             fab.friction = v;
         }
-        fab.check().map_err(|(field, m)| key(&k(field), m))?;
+        for (field, m) in fab.problems() {
+            bad(&k(field), m);
+        }
         fabrics.insert(name.clone(), fab);
     }
     if f.piece.is_empty() {
-        return Err(key("piece", "a scene needs at least one [[piece]]".into()));
+        bad("piece", "a scene needs at least one [[piece]]".into());
     }
     let mut pieces = Vec::new();
     for (i, p) in f.piece.iter().enumerate() {
         let k = |field: &str| format!("piece[{}].{field}", i + 1);
-        let spacing = positive(&k("spacing"), p.spacing)? * to_m;
+        let spacing = positive(&k("spacing"), p.spacing, 0.01) * to_m;
         let fabric_name = p.fabric.clone().unwrap_or_else(|| "cotton".into());
         let fabric = match fabrics.get(&fabric_name) {
             Some(fb) => fb.clone(),
-            None => Fabric::preset(&fabric_name)
-                .ok_or_else(|| key(&k("fabric"), unknown_preset(&fabric_name)))?,
+            None => Fabric::preset(&fabric_name).unwrap_or_else(|| {
+                bad(&k("fabric"), unknown_preset(&fabric_name));
+                Fabric::cotton()
+            }),
         };
         let position = p.position.unwrap_or([0.0; 3]);
-        finite(&k("position"), &position)?;
+        finite(&k("position"), &position);
         let rotation = p.rotation.unwrap_or([0.0; 3]);
-        finite(&k("rotation"), &rotation)?;
+        finite(&k("rotation"), &rotation);
         let outline: Vec<Point2> = p
             .outline
             .iter()
             .map(|q| Point2::new(q[0] * to_m, q[1] * to_m))
             .collect();
         if outline.len() < 3 {
-            return Err(key(
+            bad(
                 &k("outline"),
                 format!("a polygon needs at least 3 points, got {}", outline.len()),
-            ));
+            );
         }
         for q in &p.pin {
-            finite(&k("pin"), q)?;
+            finite(&k("pin"), q);
         }
         for q in &p.pin_segments {
-            finite(&k("pin_segments"), &q.concat())?;
+            finite(&k("pin_segments"), &q.concat());
         }
         let pin_radius = match p.pin_radius {
             None => 0.0,
             Some(r) if r.is_finite() && r >= 0.0 => r * to_m,
             Some(r) => {
-                return Err(key(
-                    &k("pin_radius"),
-                    format!("must be a length >= 0, got {r}"),
-                ))
+                bad(&k("pin_radius"), format!("must be a length >= 0, got {r}"));
+                0.0
             }
         };
         pieces.push(PieceSpec {
@@ -559,33 +593,45 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
     let mut names: Vec<&str> = pieces.iter().map(|p| p.name.as_str()).collect();
     names.sort_unstable();
     if let Some(w) = names.windows(2).find(|w| w[0] == w[1]) {
-        return Err(key(
-            "piece.name",
-            format!("two pieces are named '{}'", w[0]),
-        ));
+        bad("piece.name", format!("two pieces are named '{}'", w[0]));
     }
     let out = f.output.unwrap_or(OutputFile {
         ply: None,
         frames: None,
     });
-    let disc_radius = match f.report.and_then(|r| r.disc_radius) {
-        Some(r) => Some(positive("report.disc_radius", r)? * to_m),
-        None => None,
-    };
-    Ok(Scene {
-        path: path.to_path_buf(),
-        units,
-        gravity,
-        integrator,
-        dt,
-        stop,
-        cells,
-        objects,
-        pieces,
-        ply: out.ply.unwrap_or(false),
-        frames: out.frames.filter(|&k| k > 0),
-        disc_radius,
-    })
+    let disc_radius = f
+        .report
+        .and_then(|r| r.disc_radius)
+        .map(|r| positive("report.disc_radius", r, 0.09) * to_m);
+    let mut problems = problems.into_inner();
+    match problems.len() {
+        0 => Ok(Scene {
+            path: path.to_path_buf(),
+            units,
+            gravity,
+            integrator,
+            dt,
+            stop,
+            cells,
+            objects,
+            pieces,
+            ply: out.ply.unwrap_or(false),
+            frames: out.frames.filter(|&k| k > 0),
+            disc_radius,
+        }),
+        1 => {
+            let (key, message) = problems.remove(0);
+            Err(SceneError::Key {
+                path: path.to_path_buf(),
+                key,
+                message,
+            })
+        }
+        _ => Err(SceneError::Many {
+            path: path.to_path_buf(),
+            problems,
+        }),
+    }
 }
 
 fn unknown_preset(name: &str) -> String {

@@ -92,27 +92,61 @@ pub fn rotation(deg: [f64; 3]) -> nalgebra::Rotation3<f64> {
 /// Builds the world of a validated scene: objects read, prepared and placed; pieces built and
 /// placed; the model assembled.
 pub fn load(scene: &Scene) -> Result<World, SceneError> {
-    let key_err = |k: String, m: String| SceneError::Key {
-        path: scene.path.clone(),
-        key: k,
-        message: m,
-    };
+    // Every piece and every mesh is checked, and all their problems reported together.
+    let mut errors: Vec<SceneError> = Vec::new();
     let mut pieces = Vec::new();
     for (i, p) in scene.pieces.iter().enumerate() {
-        let built = pattern::build(&p.outline, p.spacing, &p.fabric, &p.pins).map_err(|error| {
-            SceneError::Piece {
+        match pattern::build(&p.outline, p.spacing, &p.fabric, &p.pins) {
+            Ok(built) => {
+                let r = rotation(p.rotation);
+                let placed: Vec<Point3> = built
+                    .flat
+                    .iter()
+                    .map(|q| Point3::from(p.position + r * Vec3::new(q.x, q.y, 0.0)))
+                    .collect();
+                pieces.push((p.name.clone(), built, p.fabric.clone(), placed));
+            }
+            Err(error) => errors.push(SceneError::Piece {
                 path: scene.path.clone(),
                 key: format!("piece[{}].outline", i + 1),
                 error,
+            }),
+        }
+    }
+    let to_m = crate::mesh::transform::Units::factor(scene.units, crate::mesh::transform::Units::M);
+    let mut meshes = Vec::new();
+    for (i, o) in scene.objects.iter().enumerate() {
+        let key = format!("object[{}].mesh", i + 1);
+        match crate::io::read_mesh(&o.mesh, &crate::io::ReadOptions::default()) {
+            Ok(read) => {
+                let mut mesh = read.mesh;
+                prepare(&mut mesh, &PrepareOptions::default());
+                if mesh.faces.is_empty() {
+                    errors.push(SceneError::Key {
+                        path: scene.path.clone(),
+                        key,
+                        message: format!(
+                            "{}: no faces remain after cleaning: not a surface to collide with",
+                            o.mesh.display()
+                        ),
+                    });
+                    continue;
+                }
+                change_up(&mut mesh, o.up, Up::Z);
+                for p in &mut mesh.positions {
+                    *p = Point3::from(p.coords * (o.scale * to_m) + o.translate);
+                }
+                meshes.push(mesh);
             }
-        })?;
-        let r = rotation(p.rotation);
-        let placed: Vec<Point3> = built
-            .flat
-            .iter()
-            .map(|q| Point3::from(p.position + r * Vec3::new(q.x, q.y, 0.0)))
-            .collect();
-        pieces.push((p.name.clone(), built, p.fabric.clone(), placed));
+            Err(error) => errors.push(SceneError::Mesh {
+                path: scene.path.clone(),
+                key,
+                error,
+            }),
+        }
+    }
+    if !errors.is_empty() {
+        return Err(SceneError::combine(&scene.path, errors));
     }
     let (model, x) = ClothModel::assemble(&pieces, scene.gravity);
     let margin = scene
@@ -120,49 +154,24 @@ pub fn load(scene: &Scene) -> Result<World, SceneError> {
         .iter()
         .map(|p| p.fabric.thickness)
         .fold(0.0, f64::max);
-    let to_m = crate::mesh::transform::Units::factor(scene.units, crate::mesh::transform::Units::M);
-    let mut colliders = Vec::new();
     let cloth_box = Aabb::of_points(&x).expect("pieces have particles");
-    for (i, o) in scene.objects.iter().enumerate() {
-        let k = format!("object[{}].mesh", i + 1);
-        let mut mesh = crate::io::read_mesh(&o.mesh, &crate::io::ReadOptions::default())
-            .map_err(|error| SceneError::Mesh {
-                path: scene.path.clone(),
-                key: k.clone(),
-                error,
-            })?
-            .mesh;
-        prepare(&mut mesh, &PrepareOptions::default());
-        if mesh.faces.is_empty() {
-            return Err(key_err(
-                k,
-                format!(
-                    "{}: no faces remain after cleaning: not a surface to collide with",
-                    o.mesh.display()
-                ),
-            ));
-        }
-        change_up(&mut mesh, o.up, Up::Z);
-        for p in &mut mesh.positions {
-            *p = Point3::from(p.coords * (o.scale * to_m) + o.translate);
-        }
-        let dims = match scene.cells {
-            Cells::Fixed(d) => d,
-            Cells::Auto => {
-                let obj = mesh.bbox().unwrap();
-                let height = cloth_box.max.z.max(obj.max.z) - cloth_box.min.z.min(obj.min.z);
-                let speed = (2.0 * scene.gravity.norm() * height).sqrt();
-                Collider::auto_dims(&mesh, speed * scene.dt)
-            }
-        };
-        colliders.push(Collider::new(
-            o.name.clone(),
-            mesh,
-            dims,
-            margin,
-            o.friction,
-        ));
-    }
+    let colliders = scene
+        .objects
+        .iter()
+        .zip(meshes)
+        .map(|(o, mesh)| {
+            let dims = match scene.cells {
+                Cells::Fixed(d) => d,
+                Cells::Auto => {
+                    let obj = mesh.bbox().unwrap();
+                    let height = cloth_box.max.z.max(obj.max.z) - cloth_box.min.z.min(obj.min.z);
+                    let speed = (2.0 * scene.gravity.norm() * height).sqrt();
+                    Collider::auto_dims(&mesh, speed * scene.dt)
+                }
+            };
+            Collider::new(o.name.clone(), mesh, dims, margin, o.friction)
+        })
+        .collect();
     Ok(World::new(model, x, colliders, scene.integrator))
 }
 

@@ -686,8 +686,16 @@ fn drape_writes_pieces_frames_and_a_report_of_finite_numbers() {
 /// mesh; asserts exit code 1, that stderr names the file and contains each needle, and that no
 /// output was created.
 fn refused(name: &str, text: &str, needles: &[&str]) {
+    refused_with(name, text, &[], needles)
+}
+
+/// As `refused`, with extra files (name, content) beside the scene.
+fn refused_with(name: &str, text: &str, files: &[(&str, &str)], needles: &[&str]) {
     let tmp = scratch(&format!("bad-{name}"));
     let dir = tmp.path();
+    for (f, content) in files {
+        std::fs::write(dir.join(f), content).unwrap();
+    }
     std::fs::copy(
         common::fixture("scenes/sphere_r0.3.obj"),
         dir.join("sphere_r0.3.obj"),
@@ -802,6 +810,49 @@ fn bad_scenes_are_refused_naming_the_file_and_the_key() {
         "bad_cells",
         &(GOOD.to_string() + "[collision]\ncells = [0, 5, 5]\n"),
         &["collision.cells", "1..4096"],
+    );
+}
+
+#[test]
+fn every_problem_of_a_scene_is_reported_at_once() {
+    let text = GOOD
+        .replace("dt = 1e-4", "dt = -1")
+        .replace("sphere_r0.3.obj", "nowhere.obj")
+        .replace(
+            "fabric = \"cotton\"",
+            "fabric = \"velvet\"\nspacing_typo = 1",
+        );
+    // A TOML-level problem (the unknown key) stops the reading first.
+    refused("typo_first", &text, &["unknown field `spacing_typo`"]);
+    let text = text.replace("\nspacing_typo = 1", "");
+    refused(
+        "three_problems",
+        &text,
+        &[
+            "3 problems",
+            "key 'solver.dt': must be a positive number, got -1",
+            "key 'object[1].mesh'",
+            "nowhere.obj does not exist",
+            "key 'piece[1].fabric': unknown fabric 'velvet'",
+        ],
+    );
+    // Pieces and meshes are checked together too.
+    let text = GOOD
+        .replace(
+            "[[-0.4, -0.4], [0.4, -0.4], [0.4, 0.4], [-0.4, 0.4]]",
+            "[[-0.4, -0.4], [0.4, 0.4], [0.4, -0.4], [-0.4, 0.4]]",
+        )
+        .replace("sphere_r0.3.obj", "empty.obj");
+    refused_with(
+        "piece_and_mesh",
+        &text,
+        &[("empty.obj", "# nothing\n")],
+        &[
+            "2 problems",
+            "key 'piece[1].outline': the outline intersects itself",
+            "key 'object[1].mesh'",
+            "empty.obj",
+        ],
     );
 }
 

@@ -188,36 +188,42 @@ impl Fabric {
         1.0 / compliance
     }
 
-    /// Checks every value: the name of the first bad field and why.
-    pub fn check(&self) -> Result<(), (&'static str, String)> {
-        let pos = |name: &'static str, v: f64| {
-            if v.is_finite() && v > 0.0 {
-                Ok(())
-            } else {
-                Err((name, format!("must be a positive number, got {v}")))
+    /// Every bad value: the field's name and why (empty when the fabric is valid).
+    ///
+    /// ```
+    /// use drapekit::cloth::fabric::Fabric;
+    /// let f = Fabric { density: -1.0, friction: 2.0, ..Fabric::cotton() };
+    /// let p = f.problems();
+    /// assert_eq!(p.iter().map(|e| e.0).collect::<Vec<_>>(), ["density", "friction"]);
+    /// assert!(Fabric::cotton().problems().is_empty());
+    /// ```
+    pub fn problems(&self) -> Vec<(&'static str, String)> {
+        let mut out = Vec::new();
+        let mut pos = |name: &'static str, v: f64| {
+            if !(v.is_finite() && v > 0.0) {
+                out.push((name, format!("must be a positive number, got {v}")));
             }
         };
-        let nonneg = |name: &'static str, v: f64| {
-            if v.is_finite() && v >= 0.0 {
-                Ok(())
-            } else {
-                Err((name, format!("must be a number >= 0, got {v}")))
+        pos("density", self.density);
+        pos("stretch", self.stretch[0]);
+        pos("stretch", self.stretch[1]);
+        for (name, v) in [
+            ("shear", self.shear),
+            ("bend", self.bend[0]),
+            ("bend", self.bend[1]),
+            ("damping", self.damping),
+            ("thickness", self.thickness),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                out.push((name, format!("must be a number >= 0, got {v}")));
             }
-        };
-        pos("density", self.density)?;
-        pos("stretch", self.stretch[0])?;
-        pos("stretch", self.stretch[1])?;
-        nonneg("shear", self.shear)?;
-        nonneg("bend", self.bend[0])?;
-        nonneg("bend", self.bend[1])?;
-        nonneg("damping", self.damping)?;
-        nonneg("thickness", self.thickness)?;
+        }
         if !(0.0..=1.0).contains(&self.friction) {
-            return Err((
+            out.push((
                 "friction",
                 format!("must be within 0..1, got {}", self.friction),
             ));
         }
-        Ok(())
+        out
     }
 }

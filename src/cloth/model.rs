@@ -188,7 +188,7 @@ impl ClothModel {
     }
 
     /// The weighted sum `sum w x` of bending element `e`.
-    #[inline]
+    #[inline(always)]
     pub fn bend_vector(&self, e: usize, x: &[Point3]) -> Vec3 {
         let (a, b) = (self.bend_start[e] as usize, self.bend_start[e + 1] as usize);
         self.bend_nodes[a..b]

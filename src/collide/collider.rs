@@ -19,6 +19,8 @@ pub struct Collider {
     pub mesh: TriMesh,
     /// Unit face normals (zero for a degenerate face).
     pub normals: Vec<Vec3>,
+    /// Plane offsets: a point `p` is `normals[f] . p - offsets[f]` in front of face `f`'s plane.
+    pub offsets: Vec<f64>,
     /// The object's box.
     pub bbox: Aabb,
     /// Faces sharing a vertex with each face: `ring_start[f]..ring_start[f+1]` in `ring`.
@@ -57,6 +59,9 @@ impl Collider {
                     Vec3::zeros()
                 }
             })
+            .collect();
+        let offsets = (0..mesh.faces.len())
+            .map(|f| normals[f].dot(&mesh.positions[mesh.faces[f][0] as usize].coords))
             .collect();
         let topo = Topology::build(&mesh);
         let mut ring_start = vec![0u32];
@@ -98,6 +103,7 @@ impl Collider {
             name,
             mesh,
             normals,
+            offsets,
             bbox,
             ring_start,
             ring,

@@ -69,9 +69,8 @@ struct Crossing {
 /// Whether segment `p0 -> p1` crosses the plane of face `f` inside the face.
 #[inline]
 fn crossing(c: &Collider, f: usize, p0: &Point3, p1: &Point3) -> Option<(f64, f64)> {
-    let n = c.normals[f];
-    let a = c.mesh.positions[c.mesh.faces[f][0] as usize];
-    let (d0, d1) = ((p0 - a).dot(&n), (p1 - a).dot(&n));
+    let (n, off) = (c.normals[f], c.offsets[f]);
+    let (d0, d1) = (p0.coords.dot(&n) - off, p1.coords.dot(&n) - off);
     if (d0 > 0.0 && d1 >= 0.0)
         || (d0 < 0.0 && d1 <= 0.0)
         || (d0 == 0.0 && d1 == 0.0)
@@ -82,7 +81,7 @@ fn crossing(c: &Collider, f: usize, p0: &Point3, p1: &Point3) -> Option<(f64, f6
     let side = if d0 != 0.0 { d0.signum() } else { -d1.signum() };
     let t = d0 / (d0 - d1);
     let r = p0 + (p1 - p0) * t;
-    inside_face(c, f, &(r - n * (r - a).dot(&n))).then_some((t, side))
+    inside_face(c, f, &(r - n * (r.coords.dot(&n) - off))).then_some((t, side))
 }
 
 /// Removes the velocity component against direction `n` (unit, pointing away from the face).
@@ -273,8 +272,7 @@ pub fn resolve(
                 for &f in grid.cell_faces(grid.linear(cell[0], cell[1], cell[2])) {
                     let f = f as usize;
                     let n = c.normals[f];
-                    let a = c.mesh.positions[c.mesh.faces[f][0] as usize];
-                    let dp = (*p1 - a).dot(&n);
+                    let dp = p1.coords.dot(&n) - c.offsets[f];
                     if dp.abs() >= th || n == Vec3::zeros() {
                         continue;
                     }
