@@ -530,6 +530,37 @@ fn the_grid_changes_the_speed_never_the_result() {
 }
 
 #[test]
+fn cloth_on_two_objects_touches_both_and_enters_neither() {
+    // Two spheres of radius 0.15 m side by side, the right one 5 cm higher.
+    let sc = scene_with("sphere_drop.toml", |s| {
+        s.stop = Stop::Steps(4000);
+        let mut right = s.objects[0].clone();
+        s.objects[0].scale = 0.5;
+        s.objects[0].translate = Vec3::new(-0.2, 0.0, 0.0);
+        right.name = "right".into();
+        right.scale = 0.5;
+        right.translate = Vec3::new(0.2, 0.0, 0.05);
+        s.objects.push(right);
+        s.pieces[0].position = Vec3::new(0.0, 0.0, 0.25);
+    });
+    let (w, _) = simulate(&sc);
+    assert_eq!(sim::particles_inside(&w), vec![Some(0), Some(0)]);
+    let th = sc.pieces[0].fabric.thickness;
+    for (i, c) in sim::min_clearance(&w).into_iter().enumerate() {
+        assert!(c >= th - 1e-6, "object {i}: {c}");
+    }
+    for object in [0, 1] {
+        let n = w
+            .state
+            .contact
+            .iter()
+            .filter(|c| c.is_some_and(|c| c.object == object))
+            .count();
+        assert!(n > 20, "object {object}: {n} particles in contact");
+    }
+}
+
+#[test]
 fn an_object_out_of_reach_gets_no_grid_and_changes_nothing() {
     let base = scene_with("sphere_drop.toml", |s| s.stop = Stop::Steps(1500));
     let with_far = scene_with("sphere_drop.toml", |s| {

@@ -139,8 +139,8 @@ struct Row {
     cells: [usize; 3],
     collision_seconds: f64,
     total_seconds: f64,
-    paper_collision_seconds: f64,
-    paper_total_seconds: f64,
+    paper_collision_seconds: Option<f64>,
+    paper_total_seconds: Option<f64>,
     contacts_end: usize,
 }
 
@@ -191,7 +191,20 @@ pub fn run(a: DrapeBench) -> anyhow::Result<()> {
     say("  cells           collision s   total s   | paper collision s   total s   | contacts at the end".into());
     let mut rows = Vec::new();
     let mut finals: Vec<Vec<Point3>> = Vec::new();
-    for (cells, pc, pt) in PAPER {
+    // The paper's grids, then the `auto` rule's (as `sim::load` picks it: travel per step from
+    // a fall of the scene's height).
+    let auto = {
+        let (w, dt) = bench_world(&torso, [1, 1, 1]);
+        let cloth = crate::math::Aabb::of_points(&w.state.x).expect("a cloth");
+        let b = torso.bbox().expect("a torso");
+        let speed = (2.0 * 9.81 * (cloth.max.z.max(b.max.z) - cloth.min.z.min(b.min.z))).sqrt();
+        Collider::auto_dims(&torso, speed * dt)
+    };
+    let grids = PAPER
+        .iter()
+        .map(|&(c, pc, pt)| (c, Some((pc, pt))))
+        .chain(std::iter::once((auto, None)));
+    for (cells, paper) in grids {
         if cells == [1, 1, 1] && a.skip_one_cell {
             continue;
         }
@@ -218,17 +231,22 @@ pub fn run(a: DrapeBench) -> anyhow::Result<()> {
             cells,
             collision_seconds: median(col),
             total_seconds: median(tot),
-            paper_collision_seconds: pc,
-            paper_total_seconds: pt,
+            paper_collision_seconds: paper.map(|p| p.0),
+            paper_total_seconds: paper.map(|p| p.1),
             contacts_end: contacts,
         };
+        let name = format!("{}x{}x{}", cells[0], cells[1], cells[2]);
         say(format!(
-            "  {:<14}  {:>11.4}  {:>8.4}   | {:>17.2}  {:>8.2}   | {}",
-            format!("{}x{}x{}", cells[0], cells[1], cells[2]),
+            "  {:<14}  {:>11.4}  {:>8.4}   | {:>17}  {:>8}   | {}",
+            if paper.is_some() {
+                name
+            } else {
+                format!("{name} auto")
+            },
             row.collision_seconds,
             row.total_seconds,
-            pc,
-            pt,
+            paper.map_or("-".into(), |(c, _)| format!("{c:.2}")),
+            paper.map_or("-".into(), |(_, t)| format!("{t:.2}")),
             contacts
         ));
         rows.push(row);

@@ -78,6 +78,13 @@ fn parse_quad_split(s: &str) -> Result<QuadSplit, String> {
 
 /// Runs the command line; the binary's `main` calls this.
 pub fn main() -> ExitCode {
+    // Die quietly when stdout is closed (`drapekit inspect x.obj | head`), as Unix tools do,
+    // instead of panicking on the failed print. Outputs are complete before any summary prints.
+    #[cfg(unix)]
+    // SAFETY: restoring the default disposition of SIGPIPE before any thread starts.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     let cli = Cli::parse();
     if let Some(n) = cli.jobs {
         // Only fails if a pool exists already, which cannot happen this early.

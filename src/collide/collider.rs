@@ -19,8 +19,9 @@ pub struct Collider {
     pub mesh: TriMesh,
     /// Unit face normals (zero for a degenerate face).
     pub normals: Vec<Vec3>,
-    /// Plane offsets: a point `p` is `normals[f] . p - offsets[f]` in front of face `f`'s plane.
-    pub offsets: Vec<f64>,
+    /// Face planes `[nx, ny, nz, d]`: a point `p` is `n . p - d` in front of face `f`'s plane
+    /// (the normal and offset side by side, read together in the collision loops).
+    pub planes: Vec<[f64; 4]>,
     /// The object's box.
     pub bbox: Aabb,
     /// Faces sharing a vertex with each face: `ring_start[f]..ring_start[f+1]` in `ring`.
@@ -60,8 +61,12 @@ impl Collider {
                 }
             })
             .collect();
-        let offsets = (0..mesh.faces.len())
-            .map(|f| normals[f].dot(&mesh.positions[mesh.faces[f][0] as usize].coords))
+        let planes = (0..mesh.faces.len())
+            .map(|f| {
+                let n: Vec3 = normals[f];
+                let d = n.dot(&mesh.positions[mesh.faces[f][0] as usize].coords);
+                [n.x, n.y, n.z, d]
+            })
             .collect();
         let topo = Topology::build(&mesh);
         let mut ring_start = vec![0u32];
@@ -103,7 +108,7 @@ impl Collider {
             name,
             mesh,
             normals,
-            offsets,
+            planes,
             bbox,
             ring_start,
             ring,
@@ -134,6 +139,13 @@ impl Collider {
         let cell = (mean / 3.0).max(2.0 * travel);
         let size = mesh.bbox().map_or(Vec3::zeros(), |b| b.size());
         [0, 1, 2].map(|a| ((size[a] / cell).ceil() as usize).clamp(1, AUTO_MAX_CELLS))
+    }
+
+    /// The plane of face `f`: its unit normal and offset.
+    #[inline(always)]
+    pub fn plane(&self, f: usize) -> (Vec3, f64) {
+        let [x, y, z, d] = self.planes[f];
+        (Vec3::new(x, y, z), d)
     }
 
     /// The grid, built on first use.

@@ -69,7 +69,7 @@ struct Crossing {
 /// Whether segment `p0 -> p1` crosses the plane of face `f` inside the face.
 #[inline]
 fn crossing(c: &Collider, f: usize, p0: &Point3, p1: &Point3) -> Option<(f64, f64)> {
-    let (n, off) = (c.normals[f], c.offsets[f]);
+    let (n, off) = c.plane(f);
     let (d0, d1) = (p0.coords.dot(&n) - off, p1.coords.dot(&n) - off);
     if (d0 > 0.0 && d1 >= 0.0)
         || (d0 < 0.0 && d1 <= 0.0)
@@ -271,8 +271,8 @@ pub fn resolve(
                 let cell = grid.clamp_cell(p1);
                 for &f in grid.cell_faces(grid.linear(cell[0], cell[1], cell[2])) {
                     let f = f as usize;
-                    let n = c.normals[f];
-                    let dp = p1.coords.dot(&n) - c.offsets[f];
+                    let (n, off) = c.plane(f);
+                    let dp = p1.coords.dot(&n) - off;
                     if dp.abs() >= th || n == Vec3::zeros() {
                         continue;
                     }
