@@ -1,4 +1,4 @@
-//! Pattern pieces: a 2D outline becomes particles, triangles and the paper's springs.
+//! Pattern pieces: a 2D outline becomes particles, triangles, the paper's springs and bending.
 //!
 //! **Particles.** The warp runs along x, the weft along y. A square grid of spacing `h` covers the
 //! outline; a grid cell is *full* when its four corners are inside the outline and at least
@@ -11,19 +11,29 @@
 //! the masses (a third of each incident triangle's area times the density) and the output mesh.
 //!
 //! **Springs** (`method.md` s. 2), constants from the fabric (`fabric`):
-//! * grid particles get the paper's 12 neighbours: stretch to the 4 direct neighbours (warp or
-//!   weft), shear on the 4 cell diagonals, bend over one node to the 4 second neighbours along
-//!   the threads (when the node between exists);
+//! * grid particles get the paper's stretch springs to the 4 direct neighbours (warp or weft,
+//!   `k = E`) and shear springs on the 4 cell diagonals (`k = G`);
 //! * in the band, every triangle edge not already a grid spring is a spring of constant
 //!   `E(theta) A / l^2`: `l` its length, `A` the area of its one or two triangles, `E(theta)`
 //!   the fabric's tensile modulus along it (`Fabric::directional_stretch`: the thread's
 //!   stiffness along a thread, about `4 G` on the bias). On a grid-like band this is the grid's
 //!   rule exactly: a thread edge inside the cloth gets `E`, one on the outline `E / 2` (it
 //!   carries half a strip), a lone cell diagonal `2 G` (the shear of the cell's two diagonal
-//!   springs). Every interior band edge also gets a bend spring between the corners opposite.
+//!   springs).
 //!
-//! Bend springs are made only when the fabric has a bending rigidity: a scene computes only
-//! what it needs.
+//! **Bending** over one node, the paper's last 4 of the 12 neighbours ([`Bend`] elements):
+//! * a grid particle whose 4 thread neighbours exist gets two elements, along warp and weft,
+//!   storing `(B / h^2) |x_prev - 2 x + x_next|^2 / 2`: a strip `h` wide bent to curvature `k`
+//!   has a second difference of length `h^2 k`, so this is the continuum's `B k^2 h^2 / 2`;
+//! * every other particle off the outline gets the cotangent Laplacian of its ring, `L x =
+//!   sum_j (cot a_ij + cot b_ij) / 2 (x_j - x)`, storing `(B / A) |L x|^2 / 2` with `A` a third
+//!   of its triangles' area and `B` the mean of warp and weft (exact on cylinders, within a few
+//!   percent on irregular triangles);
+//! * outline particles get none: a free edge carries no bending moment.
+//!
+//! Every element vanishes on the flat piece and under rigid motions, and its force is linear in
+//! the positions. Bending elements are made only when the fabric has a bending rigidity: a scene
+//! computes only what it needs.
 
 use super::fabric::Fabric;
 use crate::math::{orient2d, Point2, Point3};
