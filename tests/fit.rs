@@ -15,15 +15,7 @@ use serde_json::Value;
 use std::path::{Path, PathBuf};
 
 /// Closed around, not periodic along the height.
-fn analytic(u: f64, v: f64) -> Point3 {
-    let t = std::f64::consts::TAU * u;
-    let r = 1.0 + 0.3 * v + 0.2 * (2.0 * v).sin() + 0.1 * v.exp();
-    Point3::new(
-        r * t.cos() * (1.0 + 0.1 * (2.0 * t).cos()),
-        0.8 * r * t.sin(),
-        0.5 + 1.7 * v + 0.2 * v * v,
-    )
-}
+use drapekit::fit::surface::reference_surface as analytic;
 
 fn max_error(k: usize, m: usize) -> f64 {
     let n = 32;

@@ -119,7 +119,8 @@ fn measure(mut cmd: Command, log: &Path) -> anyhow::Result<Measured> {
     })
 }
 
-fn median(v: &[f64]) -> f64 {
+/// The median of `v` (the mean of the middle two for an even count; NaNs sort last).
+pub(super) fn median(v: &[f64]) -> f64 {
     let mut s = v.to_vec();
     s.sort_by(f64::total_cmp);
     let n = s.len();

@@ -13,6 +13,7 @@
 //! step is compared with a leapfrog run at a step 16 times smaller than the smallest tried
 //! (largest particle distance at the end), with its wall time. Unstable runs are reported as such.
 
+use super::bench::median;
 use crate::cloth::fabric::Fabric;
 use crate::cloth::model::ClothModel;
 use crate::cloth::pattern;
@@ -164,11 +165,6 @@ struct Report {
     integrators: Vec<IntegratorRow>,
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
-
 /// Runs the benchmark.
 pub fn run(a: DrapeBench) -> anyhow::Result<()> {
     let body = a.body.clone().unwrap_or_else(|| {
@@ -213,15 +209,7 @@ pub fn run(a: DrapeBench) -> anyhow::Result<()> {
         let mut contacts = 0;
         for _ in 0..a.runs {
             let (mut w, dt) = bench_world(&torso, cells);
-            let st = sim::run(
-                &mut w,
-                Integrator::Leapfrog,
-                dt,
-                Stop::Steps(a.steps),
-                None,
-                &mut |_, _| Ok(()),
-                &|_| {},
-            )?;
+            let st = sim::run_quiet(&mut w, Integrator::Leapfrog, dt, Stop::Steps(a.steps))?;
             col.push(st.collision_seconds);
             tot.push(st.wall_seconds);
             contacts = w.state.contact.iter().filter(|c| c.is_some()).count();
@@ -229,8 +217,8 @@ pub fn run(a: DrapeBench) -> anyhow::Result<()> {
         }
         let row = Row {
             cells,
-            collision_seconds: median(col),
-            total_seconds: median(tot),
+            collision_seconds: median(&col),
+            total_seconds: median(&tot),
             paper_collision_seconds: paper.map(|p| p.0),
             paper_total_seconds: paper.map(|p| p.1),
             contacts_end: contacts,
@@ -263,16 +251,8 @@ pub fn run(a: DrapeBench) -> anyhow::Result<()> {
             .build()?;
         let x = pool.install(|| {
             let (mut w, dt) = bench_world(&torso, [50, 70, 30]);
-            sim::run(
-                &mut w,
-                Integrator::Leapfrog,
-                dt,
-                Stop::Steps(a.steps),
-                None,
-                &mut |_, _| Ok(()),
-                &|_| {},
-            )
-            .map(|_| w.state.x)
+            sim::run_quiet(&mut w, Integrator::Leapfrog, dt, Stop::Steps(a.steps))
+                .map(|_| w.state.x)
         })?;
         by_threads.push(x);
     }
@@ -325,14 +305,11 @@ fn integrator_table(a: &DrapeBench, say: &dyn Fn(String)) -> anyhow::Result<Vec<
     let steps = [2e-6, 5e-6, 1e-5, 2e-5, 5e-5, 1e-4, 1.5e-4, 2.5e-4];
     let dt_ref = steps[0] / 16.0;
     let mut reference = hanging_world(Integrator::Leapfrog);
-    sim::run(
+    sim::run_quiet(
         &mut reference,
         Integrator::Leapfrog,
         dt_ref,
         Stop::Steps((duration / dt_ref).round() as u64),
-        None,
-        &mut |_, _| Ok(()),
-        &|_| {},
     )?;
     say(format!("  integrators: a 30 cm square pinned at two corners, {duration} s, against leapfrog at dt = {dt_ref:.1e} s"));
     say("  integrator       dt         error m      wall s   (stable step estimate)".into());
@@ -345,14 +322,11 @@ fn integrator_table(a: &DrapeBench, say: &dyn Fn(String)) -> anyhow::Result<Vec<
             for _ in 0..a.runs {
                 let mut w = hanging_world(integrator);
                 estimate = w.stable_step;
-                let r = sim::run(
+                let r = sim::run_quiet(
                     &mut w,
                     integrator,
                     dt,
                     Stop::Steps((duration / dt).round() as u64),
-                    None,
-                    &mut |_, _| Ok(()),
-                    &|_| {},
                 );
                 match r {
                     Ok(st) => {
@@ -373,7 +347,7 @@ fn integrator_table(a: &DrapeBench, say: &dyn Fn(String)) -> anyhow::Result<Vec<
                     }
                 }
             }
-            let wall = median(times);
+            let wall = median(&times);
             say(format!(
                 "  {:<15} {:>8.1e}   {:>10}   {:>8}   ({:.2e}){}",
                 integrator.to_string(),
@@ -407,16 +381,7 @@ fn integrator_table(a: &DrapeBench, say: &dyn Fn(String)) -> anyhow::Result<Vec<
 pub fn probe(body: &std::path::Path, cells: [usize; 3], steps: u64) -> (f64, f64, usize) {
     let torso = bench_torso(body).expect("the body");
     let (mut w, dt) = bench_world(&torso, cells);
-    let st = sim::run(
-        &mut w,
-        Integrator::Leapfrog,
-        dt,
-        Stop::Steps(steps),
-        None,
-        &mut |_, _| Ok(()),
-        &|_| {},
-    )
-    .expect("stable");
+    let st = sim::run_quiet(&mut w, Integrator::Leapfrog, dt, Stop::Steps(steps)).expect("stable");
     (
         st.collision_seconds,
         st.wall_seconds,

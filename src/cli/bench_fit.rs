@@ -8,6 +8,7 @@
 //! nodes around, for a plain periodic interpolation (no correction: the Gibbs error) and for
 //! Lanczos orders 0, 1, 2, with the fit time; then the measured convergence order.
 
+use super::bench::median;
 use super::bench::FitBench;
 use crate::fit::fitter::{fit_sections, FitOptions};
 use crate::fit::section::Section;
@@ -18,19 +19,7 @@ use realfft::RealFftPlanner;
 use serde::Serialize;
 use std::time::Instant;
 
-fn r(v: f64) -> f64 {
-    1.0 + 0.3 * v + 0.2 * (2.0 * v).sin() + 0.1 * v.exp()
-}
-
-/// The analytic surface at (u, v).
-pub fn analytic(u: f64, v: f64) -> Point3 {
-    let t = std::f64::consts::TAU * u;
-    Point3::new(
-        r(v) * t.cos() * (1.0 + 0.1 * (2.0 * t).cos()),
-        0.8 * r(v) * t.sin(),
-        0.5 + 1.7 * v + 0.2 * v * v,
-    )
-}
+use crate::fit::surface::reference_surface as analytic;
 
 const AROUND: usize = 32;
 const HEIGHTS: usize = 401;
@@ -84,21 +73,15 @@ fn plain_error(k: usize) -> f64 {
     e
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
-
 fn timed<T>(runs: u32, mut f: impl FnMut() -> T) -> f64 {
-    median(
-        (0..runs)
-            .map(|_| {
-                let t = Instant::now();
-                std::hint::black_box(f());
-                t.elapsed().as_secs_f64()
-            })
-            .collect(),
-    )
+    let times: Vec<f64> = (0..runs)
+        .map(|_| {
+            let t = Instant::now();
+            std::hint::black_box(f());
+            t.elapsed().as_secs_f64()
+        })
+        .collect();
+    median(&times)
 }
 
 #[derive(Debug, Serialize)]

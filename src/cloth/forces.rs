@@ -12,10 +12,6 @@
 
 use super::model::ClothModel;
 use crate::math::{Point3, Vec3};
-use rayon::prelude::*;
-
-/// Particles per parallel work unit.
-pub const CHUNK: usize = 512;
 
 /// The force on particle `i` at positions `x`, velocities `v`.
 #[inline]
@@ -37,17 +33,6 @@ pub fn force_on(model: &ClothModel, x: &[Point3], v: &[Vec3], i: usize) -> Vec3 
         acc -= model.bend_vector(e as usize, x) * (model.bend_c[e as usize] * w);
     }
     acc
-}
-
-/// The force on every particle at positions `x`, velocities `v`, into `out`.
-pub fn forces(model: &ClothModel, x: &[Point3], v: &[Vec3], out: &mut [Vec3]) {
-    out.par_chunks_mut(CHUNK)
-        .enumerate()
-        .for_each(|(c, chunk)| {
-            for (k, f) in chunk.iter_mut().enumerate() {
-                *f = force_on(model, x, v, c * CHUNK + k);
-            }
-        });
 }
 
 /// Energy in the springs and bending elements, J.

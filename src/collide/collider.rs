@@ -1,4 +1,4 @@
-//! One rigid object: its prepared mesh, face normals, the faces around each face (for sliding),
+//! One rigid object: its prepared mesh, face planes, the faces around each face (for sliding),
 //! its box, and its grid, built only the first time the cloth can reach the object.
 
 use super::grid::Grid;
@@ -17,9 +17,7 @@ pub struct Collider {
     pub name: String,
     /// The prepared mesh (welded, cleaned, oriented).
     pub mesh: TriMesh,
-    /// Unit face normals (zero for a degenerate face).
-    pub normals: Vec<Vec3>,
-    /// Face planes `[nx, ny, nz, d]`: a point `p` is `n . p - d` in front of face `f`'s plane
+    /// Face planes `[nx, ny, nz, d]` (unit normal, zero for a degenerate face): a point `p` is `n . p - d` in front of face `f`'s plane
     /// (the normal and offset side by side, read together in the collision loops).
     pub planes: Vec<[f64; 4]>,
     /// The object's box.
@@ -107,7 +105,6 @@ impl Collider {
         Collider {
             name,
             mesh,
-            normals,
             planes,
             bbox,
             ring_start,

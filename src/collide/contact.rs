@@ -104,7 +104,7 @@ pub fn slide_force(
     f: &mut Vec3,
     v: &mut Vec3,
 ) -> bool {
-    let n = c.normals[contact.face as usize] * contact.side;
+    let n = c.plane(contact.face as usize).0 * contact.side;
     let fn_ = f.dot(&n);
     if fn_ > 0.0 {
         return false;
@@ -155,13 +155,13 @@ pub fn resolve(
         // Held while the projection is inside the face and the particle has not left it; pushed
         // out to the thickness if it came closer, never pulled in.
         let keep = |f: usize, side: f64, p1: &Point3| -> Option<Point3> {
-            let n = c.normals[f];
-            let a = c.mesh.positions[c.mesh.faces[f][0] as usize];
-            let d = side * (p1 - a).dot(&n);
+            let (n, off) = c.plane(f);
+            let dp = p1.coords.dot(&n) - off;
+            let d = side * dp;
             if d > 1.5 * th || d < -th {
                 return None;
             }
-            let q = p1 - n * (p1 - a).dot(&n);
+            let q = p1 - n * dp;
             inside_face(c, f, &q).then(|| if d < th { q + n * (side * th) } else { *p1 })
         };
         let f = ct.face as usize;
@@ -181,7 +181,7 @@ pub fn resolve(
         match held {
             Some((p, g, side)) => {
                 *p1 = p;
-                stop_into(v, &(c.normals[g] * side));
+                stop_into(v, &(c.plane(g).0 * side));
                 *contact = Some(Contact {
                     object: ct.object,
                     face: g as u32,
@@ -238,14 +238,13 @@ pub fn resolve(
             let Some(h) = best else { break };
             let c = &colliders[h.object];
             let f = h.face as usize;
-            let n = c.normals[f];
-            let a = c.mesh.positions[c.mesh.faces[f][0] as usize];
-            let q1 = *p1 - n * (*p1 - a).dot(&n);
+            let (n, off) = c.plane(f);
+            let q1 = *p1 - n * (p1.coords.dot(&n) - off);
             *p1 = if inside_face(c, f, &q1) {
                 q1 + n * (h.side * th)
             } else {
                 let r = p0 + (*p1 - p0) * h.t;
-                r - n * (r - a).dot(&n) + n * (h.side * th)
+                r - n * (r.coords.dot(&n) - off) + n * (h.side * th)
             };
             stop_into(v, &(n * h.side));
             *contact = Some(Contact {

@@ -310,21 +310,26 @@ fn cap(positions: &mut Vec<Point3>, faces: &mut Vec<[u32; 3]>, ring: &[u32], top
     }
 }
 
+/// The analytic reference surface of `bench fit` and the tests: closed and smooth around (u in
+/// 0..1, exactly 32-node band-limited), not periodic along the height (v in 0..1):
+/// `x = r cos t (1 + 0.1 cos 2t)`, `y = 0.8 r sin t`, `z = 0.5 + 1.7 v + 0.2 v^2`,
+/// `r = 1 + 0.3 v + 0.2 sin 2v + 0.1 e^v`, `t = 2 pi u`.
+pub fn reference_surface(u: f64, v: f64) -> Point3 {
+    let t = std::f64::consts::TAU * u;
+    let r = 1.0 + 0.3 * v + 0.2 * (2.0 * v).sin() + 0.1 * v.exp();
+    Point3::new(
+        r * t.cos() * (1.0 + 0.1 * (2.0 * t).cos()),
+        0.8 * r * t.sin(),
+        0.5 + 1.7 * v + 0.2 * v * v,
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::mesh::diagnose::{diagnose, ShellState};
 
-    /// An analytic closed surface, periodic in u, not in v.
-    fn analytic(u: f64, v: f64) -> Point3 {
-        let t = std::f64::consts::TAU * u;
-        let r = 1.0 + 0.3 * v + 0.2 * (2.0 * v).sin() + 0.1 * v.exp();
-        Point3::new(
-            r * t.cos() * (1.0 + 0.1 * (2.0 * t).cos()),
-            0.8 * r * t.sin(),
-            0.5 + 1.7 * v + 0.2 * v * v,
-        )
-    }
+    use super::reference_surface as analytic;
 
     fn grid_of(f: impl Fn(f64, f64) -> Point3, k: usize, n: usize) -> Vec<Point3> {
         (0..k)
