@@ -10,5 +10,6 @@ pub mod fit;
 pub mod io;
 pub mod math;
 pub mod mesh;
+pub mod par;
 pub mod scene;
 pub mod sim;

@@ -4,8 +4,14 @@
 //! units = "m"                      # all lengths of the file (not fabric tables): m, cm, mm
 //! gravity = [0.0, 0.0, -9.81]      # length units per s^2 (default: 9.81 m/s^2 down z)
 //! [solver]
-//! integrator = "leapfrog"          # or "explicit-euler"
-//! dt = 1e-4                        # s
+//! integrator = "implicit-euler"    # (default) or "projective-dynamics", "leapfrog",
+//!                                  # "explicit-euler"
+//! dt = 0.01                        # s (default: the integrator's, `Integrator::default_dt`)
+//! newton_iterations = 1            # implicit Euler: Newton steps per step (1: Baraff-Witkin)
+//! cg_tolerance = 1e-6              # implicit Euler: relative residual of conjugate gradients
+//! cg_max_iterations = 1000         # implicit Euler
+//! iterations = 10                  # projective dynamics: local/global iterations per step
+//! chebyshev = 0.9                  # projective dynamics: Chebyshev acceleration's rho
 //! steps = 10000                    # or duration = 1.0 (s), or until_rest = 1e-6 (J, kinetic)
 //! max_steps = 1000000              # with until_rest: give up after this many
 //! [collision]
@@ -37,10 +43,11 @@
 //! Any other key is an error that names it.
 
 use crate::cloth::fabric::{Fabric, Kes};
+use crate::cloth::integrate::{Integrator, SolverSettings};
 use crate::cloth::pattern::Pins;
-use crate::cloth::Integrator;
 use crate::math::{Point2, Vec3};
 use crate::mesh::transform::{Units, Up};
+use crate::sim::settings::{Cells, Stop};
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -130,7 +137,12 @@ struct File {
 #[serde(deny_unknown_fields)]
 struct SolverFile {
     integrator: Option<String>,
-    dt: f64,
+    dt: Option<f64>,
+    newton_iterations: Option<u32>,
+    cg_tolerance: Option<f64>,
+    cg_max_iterations: Option<u32>,
+    iterations: Option<u32>,
+    chebyshev: Option<f64>,
     steps: Option<u64>,
     duration: Option<f64>,
     until_rest: Option<f64>,
@@ -231,24 +243,6 @@ struct ReportFile {
     disc_radius: Option<f64>,
 }
 
-/// When a run stops.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Stop {
-    /// After this many steps.
-    Steps(u64),
-    /// When the kinetic energy (J) falls below the threshold, or after `max_steps`.
-    UntilRest { energy: f64, max_steps: u64 },
-}
-
-/// Cells of the collision grids.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Cells {
-    /// The same counts for every object.
-    Fixed([usize; 3]),
-    /// The `auto` rule (`Collider::auto_dims`).
-    Auto,
-}
-
 /// An object, as the scene places it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ObjectSpec {
@@ -296,10 +290,8 @@ pub struct Scene {
     pub units: Units,
     /// Gravity, m/s^2.
     pub gravity: Vec3,
-    /// Integrator.
-    pub integrator: Integrator,
-    /// Time step, s.
-    pub dt: f64,
+    /// The solver: integrator, step, iterations, tolerances.
+    pub solver: SolverSettings,
     /// When to stop.
     pub stop: Stop,
     /// Grid cells.
@@ -364,13 +356,84 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
         .solver
         .integrator
         .as_deref()
-        .unwrap_or("leapfrog")
-        .parse()
-        .unwrap_or_else(|m| {
-            bad("solver.integrator", m);
-            Integrator::Leapfrog
-        });
-    let dt = positive("solver.dt", f.solver.dt, 1e-4);
+        .map(|name| {
+            name.parse().unwrap_or_else(|m| {
+                bad("solver.integrator", m);
+                Integrator::ImplicitEuler
+            })
+        })
+        .unwrap_or(Integrator::ImplicitEuler);
+    let mut solver = SolverSettings::new(integrator);
+    if let Some(dt) = f.solver.dt {
+        solver.dt = positive("solver.dt", dt, solver.dt);
+    }
+    let dt = solver.dt;
+    let count = |k: &str, v: Option<u32>, to: &mut u32| {
+        if let Some(v) = v {
+            if v == 0 {
+                bad(k, "must be at least 1".into());
+            } else {
+                *to = v;
+            }
+        }
+    };
+    count(
+        "solver.newton_iterations",
+        f.solver.newton_iterations,
+        &mut solver.newton_iterations,
+    );
+    count(
+        "solver.cg_max_iterations",
+        f.solver.cg_max_iterations,
+        &mut solver.cg_max_iterations,
+    );
+    count(
+        "solver.iterations",
+        f.solver.iterations,
+        &mut solver.iterations,
+    );
+    if let Some(t) = f.solver.cg_tolerance {
+        if t.is_finite() && t > 0.0 && t < 1.0 {
+            solver.cg_tolerance = t;
+        } else {
+            bad(
+                "solver.cg_tolerance",
+                format!("must be a number in (0, 1), got {t}"),
+            );
+        }
+    }
+    if let Some(r) = f.solver.chebyshev {
+        if r.is_finite() && r > 0.0 && r < 1.0 {
+            solver.chebyshev = Some(r);
+        } else {
+            bad(
+                "solver.chebyshev",
+                format!("must be a spectral radius in (0, 1), got {r}"),
+            );
+        }
+    }
+    let explicit_only = [
+        (
+            "solver.newton_iterations",
+            f.solver.newton_iterations.is_some()
+                || f.solver.cg_tolerance.is_some()
+                || f.solver.cg_max_iterations.is_some(),
+            Integrator::ImplicitEuler,
+        ),
+        (
+            "solver.iterations",
+            f.solver.iterations.is_some() || f.solver.chebyshev.is_some(),
+            Integrator::ProjectiveDynamics,
+        ),
+    ];
+    for (key, given, owner) in explicit_only {
+        if given && integrator != owner {
+            bad(
+                key,
+                format!("applies to integrator = \"{owner}\" only (this scene uses {integrator})"),
+            );
+        }
+    }
     let s = &f.solver;
     let stop = match (s.steps, s.duration, s.until_rest) {
         (Some(n), None, None) => {
@@ -609,8 +672,7 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
             path: path.to_path_buf(),
             units,
             gravity,
-            integrator,
-            dt,
+            solver,
             stop,
             cells,
             objects,

@@ -15,6 +15,7 @@
 
 use super::bench::median;
 use crate::cloth::fabric::Fabric;
+use crate::cloth::integrate::SolverSettings;
 use crate::cloth::model::ClothModel;
 use crate::cloth::pattern;
 use crate::cloth::Integrator;
@@ -26,7 +27,7 @@ use crate::math::{Point2, Point3, Vec3};
 use crate::mesh::prepare::{prepare, PrepareOptions};
 use crate::mesh::transform::{change_up, Up};
 use crate::mesh::TriMesh;
-use crate::scene::Stop;
+use crate::sim::Stop;
 use crate::sim::{self, World};
 use anyhow::{ensure, Context};
 use serde::Serialize;
@@ -209,7 +210,11 @@ pub fn run(a: DrapeBench) -> anyhow::Result<()> {
         let mut contacts = 0;
         for _ in 0..a.runs {
             let (mut w, dt) = bench_world(&torso, cells);
-            let st = sim::run_quiet(&mut w, Integrator::Leapfrog, dt, Stop::Steps(a.steps))?;
+            let st = sim::run_quiet(
+                &mut w,
+                &SolverSettings::new(Integrator::Leapfrog).with_dt(dt),
+                Stop::Steps(a.steps),
+            )?;
             col.push(st.collision_seconds);
             tot.push(st.wall_seconds);
             contacts = w.state.contact.iter().filter(|c| c.is_some()).count();
@@ -251,8 +256,12 @@ pub fn run(a: DrapeBench) -> anyhow::Result<()> {
             .build()?;
         let x = pool.install(|| {
             let (mut w, dt) = bench_world(&torso, [50, 70, 30]);
-            sim::run_quiet(&mut w, Integrator::Leapfrog, dt, Stop::Steps(a.steps))
-                .map(|_| w.state.x)
+            sim::run_quiet(
+                &mut w,
+                &SolverSettings::new(Integrator::Leapfrog).with_dt(dt),
+                Stop::Steps(a.steps),
+            )
+            .map(|_| w.state.x)
         })?;
         by_threads.push(x);
     }
@@ -307,8 +316,7 @@ fn integrator_table(a: &DrapeBench, say: &dyn Fn(String)) -> anyhow::Result<Vec<
     let mut reference = hanging_world(Integrator::Leapfrog);
     sim::run_quiet(
         &mut reference,
-        Integrator::Leapfrog,
-        dt_ref,
+        &SolverSettings::new(Integrator::Leapfrog).with_dt(dt_ref),
         Stop::Steps((duration / dt_ref).round() as u64),
     )?;
     say(format!("  integrators: a 30 cm square pinned at two corners, {duration} s, against leapfrog at dt = {dt_ref:.1e} s"));
@@ -324,8 +332,7 @@ fn integrator_table(a: &DrapeBench, say: &dyn Fn(String)) -> anyhow::Result<Vec<
                 estimate = w.stable_step;
                 let r = sim::run_quiet(
                     &mut w,
-                    integrator,
-                    dt,
+                    &SolverSettings::new(integrator).with_dt(dt),
                     Stop::Steps((duration / dt).round() as u64),
                 );
                 match r {
@@ -381,7 +388,12 @@ fn integrator_table(a: &DrapeBench, say: &dyn Fn(String)) -> anyhow::Result<Vec<
 pub fn probe(body: &std::path::Path, cells: [usize; 3], steps: u64) -> (f64, f64, usize) {
     let torso = bench_torso(body).expect("the body");
     let (mut w, dt) = bench_world(&torso, cells);
-    let st = sim::run_quiet(&mut w, Integrator::Leapfrog, dt, Stop::Steps(steps)).expect("stable");
+    let st = sim::run_quiet(
+        &mut w,
+        &SolverSettings::new(Integrator::Leapfrog).with_dt(dt),
+        Stop::Steps(steps),
+    )
+    .expect("stable");
     (
         st.collision_seconds,
         st.wall_seconds,

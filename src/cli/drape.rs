@@ -63,6 +63,25 @@ pub struct PieceReport {
     pub files: Vec<String>,
 }
 
+/// Where the time of a run went.
+#[derive(Debug, Serialize)]
+pub struct Phases {
+    /// Predict (external forces, inertial positions), s.
+    pub predict_seconds: f64,
+    /// Solve (the integrator), s; includes the factorisation.
+    pub solve_seconds: f64,
+    /// Collide, s.
+    pub collision_seconds: f64,
+    /// Measure (energy watch, rest test), s.
+    pub measure_seconds: f64,
+    /// Factoring the projective-dynamics matrix, s.
+    pub factor_seconds: f64,
+    /// Conjugate-gradient iterations (implicit Euler).
+    pub cg_iterations: u64,
+    /// Local/global iterations (projective dynamics).
+    pub pd_iterations: u64,
+}
+
 /// The JSON report of `drape`. Lengths are in the scene's units.
 #[derive(Debug, Serialize)]
 pub struct DrapeReport {
@@ -82,6 +101,8 @@ pub struct DrapeReport {
     pub object_faces: usize,
     /// Grid cells of each object.
     pub cells: Vec<[usize; 3]>,
+    /// Every solver setting (integrator, step, iterations, tolerances).
+    pub solver: crate::cloth::integrate::SolverSettings,
     /// Integrator.
     pub integrator: crate::cloth::Integrator,
     /// Time step, s.
@@ -96,6 +117,8 @@ pub struct DrapeReport {
     pub wall_seconds: f64,
     /// Of which collision, s.
     pub collision_seconds: f64,
+    /// Wall time of each phase of the step, s, and the solver's work.
+    pub phases: Phases,
     /// Particles in contact with an object at the end.
     pub contacts_end: usize,
     /// Particles inside closed objects at the end.
@@ -163,10 +186,7 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
     let inputs: Vec<&Path> = std::iter::once(sc.path.as_path())
         .chain(sc.objects.iter().map(|o| o.mesh.as_path()))
         .collect();
-    let total = match sc.stop {
-        scene::Stop::Steps(n) => n,
-        scene::Stop::UntilRest { max_steps, .. } => max_steps,
-    };
+    let total = sc.stop.max_steps();
     let bar = super::interactive().then(|| {
         let b = indicatif::ProgressBar::new(total);
         b.set_style(
@@ -206,13 +226,7 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
         }
     };
     let stats = sim::run(
-        &mut world,
-        sc.integrator,
-        sc.dt,
-        sc.stop,
-        sc.frames,
-        &mut frame,
-        &progress,
+        &mut world, &sc.solver, sc.stop, sc.frames, &mut frame, &progress,
     );
     if let Some(b) = &bar {
         b.finish_and_clear();
@@ -287,13 +301,23 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
         ],
         object_faces: world.colliders.iter().map(|c| c.mesh.faces.len()).sum(),
         cells: world.colliders.iter().map(|c| c.dims).collect(),
-        integrator: sc.integrator,
-        dt: sc.dt,
+        solver: sc.solver,
+        integrator: sc.solver.integrator,
+        dt: sc.solver.dt,
         steps: stats.steps,
         time: stats.time,
         at_rest: stats.at_rest,
         wall_seconds: stats.wall_seconds,
         collision_seconds: stats.collision_seconds,
+        phases: Phases {
+            predict_seconds: stats.predict_seconds,
+            solve_seconds: stats.solve_seconds,
+            collision_seconds: stats.collision_seconds,
+            measure_seconds: stats.measure_seconds,
+            factor_seconds: stats.solver.factor_seconds,
+            cg_iterations: stats.solver.cg_iterations,
+            pd_iterations: stats.solver.pd_iterations,
+        },
         contacts_end: world.state.contact.iter().filter(|c| c.is_some()).count(),
         particles_inside: inside.iter().flatten().sum(),
         min_clearance: objects.iter().map(|o| o.min_clearance).reduce(f64::min),

@@ -16,7 +16,7 @@ use clap::{Args, Parser, Subcommand};
 use std::io::IsTerminal;
 use std::process::ExitCode;
 
-pub use bench::SplitMix;
+pub use crate::math::SplitMix;
 pub use bench_drape::probe as bench_drape_probe;
 pub use convert::ConvertReport;
 

@@ -1,38 +1,37 @@
 //! Forces: springs, gravity, air damping (`method.md` s. 2):
 //! `m_i r_i'' = -c_i r_i' + m_i g + sum_j k_ij (|r_j - r_i| - l0_ij) (r_j - r_i) / |r_j - r_i|`
-//! plus bending.
-//!
-//! Bending (`cloth::pattern`): each element over a node stores `c |sum_k w_k x_k|^2 / 2`, so
-//! its force on particle `k` is `-c w_k sum_j w_j x_j`: linear in the positions, zero on the flat
-//! piece and under rigid motions.
+//! plus bending. Each element's force is minus the gradient of its energy (`cloth::elements`).
 //!
 //! Each particle gathers its own springs (every spring is evaluated from both ends), so the
 //! loop runs in parallel over fixed chunks of particles without atomics, and the result does
 //! not depend on the number of threads.
 
+use super::elements::bend;
 use super::model::ClothModel;
 use crate::math::{Point3, Vec3};
 
-/// The force on particle `i` at positions `x`, velocities `v`.
-#[inline]
-pub fn force_on(model: &ClothModel, x: &[Point3], v: &[Vec3], i: usize) -> Vec3 {
-    let m = model.mass[i];
-    let mut acc = model.gravity * m - v[i] * (model.damping[i] * m);
+/// The internal force (springs and bending) on particle `i` at positions `x`, added to `acc`.
+#[inline(always)]
+pub fn add_internal(model: &ClothModel, x: &[Point3], i: usize, mut acc: Vec3) -> Vec3 {
     let xi = x[i];
     for &(j, s) in &model.adj[model.adj_start[i] as usize..model.adj_start[i + 1] as usize] {
-        let spring = &model.springs[s as usize];
-        let d = x[j as usize] - xi;
-        let len = d.norm();
-        if len > 0.0 {
-            acc += d * (spring.k * (len - spring.rest) / len);
-        }
+        acc += model.springs[s as usize].force_on_a(&xi, &x[j as usize]);
     }
     for &(e, w) in
         &model.bend_adj[model.bend_adj_start[i] as usize..model.bend_adj_start[i + 1] as usize]
     {
-        acc -= model.bend_vector(e as usize, x) * (model.bend_c[e as usize] * w);
+        let e = e as usize;
+        acc += bend::force(model.bend_c[e], w, &model.bend_vector(e, x));
     }
     acc
+}
+
+/// The force on particle `i` at positions `x`, velocities `v`, with external force `f_ext[i]`
+/// (gravity) and explicit air damping.
+#[inline]
+pub fn force_on(model: &ClothModel, x: &[Point3], v: &[Vec3], f_ext: &[Vec3], i: usize) -> Vec3 {
+    let m = model.mass[i];
+    add_internal(model, x, i, f_ext[i] - v[i] * (model.damping[i] * m))
 }
 
 /// Energy in the springs and bending elements, J.
@@ -40,13 +39,10 @@ pub fn spring_energy(model: &ClothModel, x: &[Point3]) -> f64 {
     model
         .springs
         .iter()
-        .map(|s| {
-            let e = (x[s.b as usize] - x[s.a as usize]).norm() - s.rest;
-            0.5 * s.k * e * e
-        })
+        .map(|s| s.energy(&x[s.a as usize], &x[s.b as usize]))
         .sum::<f64>()
         + (0..model.bends())
-            .map(|e| 0.5 * model.bend_c[e] * model.bend_vector(e, x).norm_squared())
+            .map(|e| bend::energy(model.bend_c[e], &model.bend_vector(e, x)))
             .sum::<f64>()
 }
 
@@ -58,10 +54,12 @@ pub fn kinetic_energy(model: &ClothModel, v: &[Vec3]) -> f64 {
         .sum()
 }
 
-/// Gravitational potential energy (zero at the origin), J.
-pub fn gravity_energy(model: &ClothModel, x: &[Point3]) -> f64 {
+/// Gravitational potential energy of positions `x` relative to positions `x0`, J: zero at `x0`,
+/// whatever the height of the scene.
+pub fn gravity_energy(model: &ClothModel, x: &[Point3], x0: &[Point3]) -> f64 {
     -x.iter()
+        .zip(x0)
         .zip(&model.mass)
-        .map(|(p, m)| m * model.gravity.dot(&p.coords))
+        .map(|((p, q), m)| m * model.gravity.dot(&(p - q)))
         .sum::<f64>()
 }

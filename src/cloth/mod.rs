@@ -1,6 +1,7 @@
 //! The particle cloth of `method.md` sections 2-3: fabrics, pattern pieces, the model (what never
 //! changes), the state (what changes every step), forces, integrators and the stability estimate.
 
+pub mod elements;
 pub mod fabric;
 pub mod forces;
 pub mod integrate;

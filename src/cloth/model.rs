@@ -1,8 +1,9 @@
 //! The cloth model: everything that never changes during a run (masses, springs, rest lengths,
 //! pins, triangles, per-particle fabric values), as flat arrays.
 
+use super::elements::{bend, Spring, SpringKind};
 use super::fabric::Fabric;
-use super::pattern::{Piece, Spring, SpringKind};
+use super::pattern::Piece;
 use crate::math::{Point3, Vec3};
 use serde::Serialize;
 
@@ -182,6 +183,20 @@ impl ClothModel {
         self.inv_mass[i] == 0.0
     }
 
+    /// The unknowns of a global solve: each particle's index among the free particles
+    /// (`u32::MAX` if pinned), and the particle of each unknown.
+    pub fn free_unknowns(&self) -> (Vec<u32>, Vec<u32>) {
+        let mut index = vec![u32::MAX; self.len()];
+        let mut particles = Vec::new();
+        for (i, slot) in index.iter_mut().enumerate() {
+            if !self.pinned(i) {
+                *slot = particles.len() as u32;
+                particles.push(i as u32);
+            }
+        }
+        (index, particles)
+    }
+
     /// Number of bending elements.
     pub fn bends(&self) -> usize {
         self.bend_c.len()
@@ -191,12 +206,7 @@ impl ClothModel {
     #[inline(always)]
     pub fn bend_vector(&self, e: usize, x: &[Point3]) -> Vec3 {
         let (a, b) = (self.bend_start[e] as usize, self.bend_start[e + 1] as usize);
-        self.bend_nodes[a..b]
-            .iter()
-            .zip(&self.bend_weights[a..b])
-            .fold(Vec3::zeros(), |acc, (&v, &w)| {
-                acc + x[v as usize].coords * w
-            })
+        bend::vector(&self.bend_nodes[a..b], &self.bend_weights[a..b], x)
     }
 
     /// Springs of one kind.

@@ -38,48 +38,12 @@
 use super::fabric::Fabric;
 use crate::math::{orient2d, Point2, Point3};
 use crate::mesh::polygon::triangulate_with_holes;
-use serde::Serialize;
 use std::collections::HashMap;
 
 /// Grid corners closer than this many spacings to the outline are not kept.
 pub const CLEARANCE: f64 = 0.4;
 
-/// What a spring models.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum SpringKind {
-    /// Along a thread (or a band edge).
-    Stretch,
-    /// A cell diagonal.
-    Shear,
-}
-
-/// A linear spring `F = k (|d| - rest) d / |d|`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Spring {
-    /// First particle.
-    pub a: u32,
-    /// Second particle.
-    pub b: u32,
-    /// Rest length, m.
-    pub rest: f64,
-    /// Constant, N/m.
-    pub k: f64,
-    /// Kind.
-    pub kind: SpringKind,
-}
-
-/// A bending element: energy `c |sum_k w_k x_k|^2 / 2` (J) over a few particles whose weights
-/// sum to zero and whose weighted sum vanishes on the flat piece.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Bend {
-    /// The particles; the first is the node the element bends over.
-    pub nodes: Vec<u32>,
-    /// Their weights.
-    pub weights: Vec<f64>,
-    /// The constant, N/m.
-    pub c: f64,
-}
+pub use super::elements::{Bend, Spring, SpringKind};
 
 /// Cotangent weights above this mark a sliver triangle; its node gets no bending element.
 const MAX_COT: f64 = 1e3;

@@ -1,18 +1,17 @@
-//! The largest stable step, estimated before a run, and the energy watch during it.
+//! The largest stable step of the explicit integrators, estimated before a run.
 //!
-//! Linearised at rest, the springs give a stiffness matrix `K` (each spring adds `k u u^T`
-//! blocks along its direction `u`); the highest eigenfrequency `w` of `M^-1 K` (pinned particles
-//! held) comes from power iteration. A step `h` is stable when
+//! Linearised, the springs and bending elements give a stiffness matrix `K`; a step `h` is
+//! stable when, for the highest eigenfrequency `w` of `M^-1 K` (pinned particles held),
 //! * leapfrog: `h < 2 / w`;
 //! * explicit Euler with air damping rate `c`: `h < c / (c^2 / 4 + w^2)` (zero without damping:
 //!   explicit Euler then grows every oscillation).
 //!
-//! During a run the mechanical energy (kinetic + springs + gravity) can only fall (damping and
-//! collisions take energy out, nothing puts it in), up to the bounded error of a stable
-//! integrator. A run whose energy rises by more than the scene's energy scale, or that produces a
-//! non-finite number, is unstable and stops.
+//! [`max_frequency`] estimates `w` at rest by power iteration, from below: a step just under
+//! its `2 / w` can still blow up (the iteration has not converged, or the cloth stretched).
+//! [`frequency_bound`] bounds it from above (Gershgorin) at any stretch, so the estimate a run
+//! uses (`sim::World::stable_step`) is conservative. The energy watch during a run is in
+//! `sim::watch`.
 
-use super::integrate::Integrator;
 use super::model::ClothModel;
 use crate::math::{Point3, Vec3};
 
@@ -23,7 +22,7 @@ pub fn max_frequency(model: &ClothModel, x: &[Point3]) -> f64 {
         return 0.0;
     }
     // A fixed pseudo-random start, orthogonal to nothing in particular.
-    let mut rng = crate::cli::SplitMix(7);
+    let mut rng = crate::math::SplitMix(7);
     let mut y: Vec<Vec3> = (0..n)
         .map(|i| {
             if model.pinned(i) {
@@ -98,13 +97,46 @@ pub fn max_frequency(model: &ClothModel, x: &[Point3]) -> f64 {
     lambda.max(0.0).sqrt()
 }
 
-/// The largest stable step (s) of `integrator` for frequency `w` and damping rate `c`.
-pub fn stable_step(integrator: Integrator, w: f64, c: f64) -> f64 {
-    if w == 0.0 {
-        return f64::INFINITY;
+/// A bound on the highest eigenfrequency (rad/s) of the springs and bending elements at any
+/// stretch (compressed by less than half): Gershgorin's, `w^2 <= max_i (2 sum_s k_s +
+/// sum_e c_e |w_ie| sum_k |w_ke|) / m_i` over the free particles, from the 3x3 blocks of the
+/// stiffness matrix (a spring's block has norm `k` unless compressed below half its rest
+/// length). It is never below the power iteration's estimate, so an explicit step under
+/// `2 / w` is stable for the linearised cloth, stretched or not.
+pub fn frequency_bound(model: &ClothModel) -> f64 {
+    let mut worst: f64 = 0.0;
+    for i in 0..model.len() {
+        if model.pinned(i) {
+            continue;
+        }
+        let springs: f64 = model.adj[model.adj_start[i] as usize..model.adj_start[i + 1] as usize]
+            .iter()
+            .map(|&(_, s)| model.springs[s as usize].k)
+            .sum();
+        let bends: f64 = model.bend_adj
+            [model.bend_adj_start[i] as usize..model.bend_adj_start[i + 1] as usize]
+            .iter()
+            .map(|&(e, w)| {
+                let e = e as usize;
+                let (lo, hi) = (
+                    model.bend_start[e] as usize,
+                    model.bend_start[e + 1] as usize,
+                );
+                let sum: f64 = model.bend_weights[lo..hi].iter().map(|w| w.abs()).sum();
+                model.bend_c[e] * w.abs() * sum
+            })
+            .sum();
+        worst = worst.max((2.0 * springs + bends) / model.mass[i]);
     }
-    match integrator {
-        Integrator::Leapfrog => 2.0 / w,
-        Integrator::ExplicitEuler => c / (c * c / 4.0 + w * w),
+    worst.sqrt()
+}
+
+/// The smallest air damping rate of the model's particles, 1/s (0 without particles).
+pub fn min_damping(model: &ClothModel) -> f64 {
+    let c = model.damping.iter().copied().fold(f64::INFINITY, f64::min);
+    if c.is_finite() {
+        c
+    } else {
+        0.0
     }
 }

@@ -226,7 +226,7 @@ mod tests {
     fn grid_agrees_with_brute_force() {
         let m = generate::uv_sphere(Point3::new(0.2, -0.1, 0.3), 0.7, 9, 13);
         let q = ClosestPoints::new(&m);
-        let mut rng = crate::cli::SplitMix(5);
+        let mut rng = crate::math::SplitMix(5);
         for _ in 0..300 {
             let p = Point3::new(
                 rng.next_f64() * 3.0 - 1.5,

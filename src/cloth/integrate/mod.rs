@@ -1,0 +1,295 @@
+//! Time integration (`method.md` s. 3 and 6): one settings struct, one [`Solver`] trait, four
+//! integrators.
+//!
+//! A step of the simulation runs in phases (`sim::run`): *predict* (external forces and the
+//! inertial position `y = x + h v + h^2 M^-1 f_ext`), *solve* (this module: the integrator turns
+//! the state into new positions and velocities), *collide* (`collide::contact`), *measure*. The
+//! integrators differ only in the solve phase:
+//!
+//! * explicit Euler: `x+ = x + h v`, `v+ = v + h F/m`, stable below `c / (c^2/4 + w^2)` for
+//!   air damping `c` and highest eigenfrequency `w`;
+//! * leapfrog (symplectic Euler, the papers' default): `v+ = v + h F/m`, `x+ = x + h v+`,
+//!   stable below `2 / w`;
+//! * implicit (backward) Euler as Baraff and Witkin solve it (`implicit.rs`): Newton steps on
+//!   `M (v+ - v) = h F(x + h v+, v+)`, each a linear system solved by preconditioned conjugate
+//!   gradients, with contact as constraint filtering;
+//! * projective dynamics (`projective.rs`): the same backward Euler step as a minimisation,
+//!   solved by local projections and a global solve with a matrix factored once.
+//!
+//! The two explicit methods are only conditionally stable: [`Integrator::stable_step`] gives
+//! their largest step, [`Integrator::advice`] what to do above it. The implicit ones are stable
+//! at any step; their price is numerical damping, measured in `drapekit bench drape`.
+
+// Index loops read best in this numerical code (several arrays per particle).
+#![allow(clippy::needless_range_loop)]
+
+pub mod cg;
+pub mod direct;
+pub mod explicit;
+pub mod implicit;
+pub mod projective;
+
+use super::model::ClothModel;
+use super::state::Contact;
+use crate::collide::Collider;
+use crate::math::{Point3, Vec3};
+use serde::Serialize;
+use std::fmt;
+use std::str::FromStr;
+
+/// The time integrator.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Integrator {
+    /// Explicit (forward) Euler.
+    ExplicitEuler,
+    /// Leapfrog / symplectic Euler.
+    Leapfrog,
+    /// Implicit (backward) Euler, Baraff-Witkin (the default).
+    ImplicitEuler,
+    /// Projective dynamics (local/global).
+    ProjectiveDynamics,
+}
+
+impl Integrator {
+    /// Every integrator, in the order of the docs.
+    pub const ALL: [Integrator; 4] = [
+        Integrator::ExplicitEuler,
+        Integrator::Leapfrog,
+        Integrator::ImplicitEuler,
+        Integrator::ProjectiveDynamics,
+    ];
+
+    /// Whether the integrator is stable only below a step ([`Integrator::stable_step`]).
+    pub fn is_explicit(self) -> bool {
+        matches!(self, Integrator::ExplicitEuler | Integrator::Leapfrog)
+    }
+
+    /// The largest stable step (s) for highest eigenfrequency `w` (rad/s) and air damping rate
+    /// `c` (1/s); infinite for the implicit integrators.
+    pub fn stable_step(self, w: f64, c: f64) -> f64 {
+        if w == 0.0 {
+            return f64::INFINITY;
+        }
+        match self {
+            Integrator::Leapfrog => 2.0 / w,
+            Integrator::ExplicitEuler => c / (c * c / 4.0 + w * w),
+            Integrator::ImplicitEuler | Integrator::ProjectiveDynamics => f64::INFINITY,
+        }
+    }
+
+    /// What to do when a run with this integrator went unstable, for the scene's estimated
+    /// largest stable step `estimate` and highest frequency `w`.
+    pub fn advice(self, estimate: f64, w: f64) -> String {
+        match self {
+            Integrator::Leapfrog => format!(
+                "use dt <= {:.2e} s, or a larger spacing, or the implicit-euler integrator (stable at any step)",
+                0.9 * estimate
+            ),
+            Integrator::ExplicitEuler => format!(
+                "use dt <= {:.2e} s, or the leapfrog integrator (stable up to {:.2e} s here), or more damping",
+                0.9 * estimate,
+                0.9 * Integrator::Leapfrog.stable_step(w, 0.0)
+            ),
+            Integrator::ImplicitEuler => "raise newton_iterations or lower cg_tolerance, and report the scene: implicit Euler should not go unstable".into(),
+            Integrator::ProjectiveDynamics => "raise iterations or turn chebyshev off, and report the scene: projective dynamics should not go unstable".into(),
+        }
+    }
+
+    /// A step (s) that drapes well with this integrator when a scene gives none.
+    pub fn default_dt(self) -> f64 {
+        match self {
+            Integrator::ExplicitEuler | Integrator::Leapfrog => 1e-5,
+            Integrator::ImplicitEuler | Integrator::ProjectiveDynamics => DEFAULT_DT,
+        }
+    }
+}
+
+/// The step of the default integrator, s.
+pub const DEFAULT_DT: f64 = 1.0 / 100.0;
+
+impl FromStr for Integrator {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        Integrator::ALL
+            .into_iter()
+            .find(|i| i.to_string() == s)
+            .ok_or_else(|| {
+                format!("unknown integrator '{s}': expected 'implicit-euler', 'projective-dynamics', 'leapfrog' or 'explicit-euler'")
+            })
+    }
+}
+
+impl fmt::Display for Integrator {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Integrator::ExplicitEuler => "explicit-euler",
+            Integrator::Leapfrog => "leapfrog",
+            Integrator::ImplicitEuler => "implicit-euler",
+            Integrator::ProjectiveDynamics => "projective-dynamics",
+        })
+    }
+}
+
+/// How implicit Euler solves its linear systems.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum LinearSolver {
+    /// Sparse Cholesky of the assembled matrix (pattern analysed once).
+    Cholesky,
+    /// Block-Jacobi preconditioned conjugate gradients, matrix-free.
+    Cg,
+}
+
+/// Everything that sets up a solver. Units are SI.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct SolverSettings {
+    /// The integrator (default implicit Euler).
+    pub integrator: Integrator,
+    /// Time step, s (default [`Integrator::default_dt`]).
+    pub dt: f64,
+    /// Implicit Euler: Newton iterations per step (default 1, Baraff and Witkin's linearised
+    /// step; more converge the backward Euler step, the accuracy reference).
+    pub newton_iterations: u32,
+    /// Implicit Euler: how each Newton step's linear system is solved (default sparse
+    /// Cholesky).
+    pub linear_solver: LinearSolver,
+    /// Implicit Euler: conjugate gradients stop when the preconditioned residual has fallen by
+    /// this factor (default 1e-6).
+    pub cg_tolerance: f64,
+    /// Implicit Euler: at most this many conjugate-gradient iterations per Newton step (default
+    /// 1000).
+    pub cg_max_iterations: u32,
+    /// Projective dynamics: local/global iterations per step (default 10).
+    pub iterations: u32,
+    /// Projective dynamics: Chebyshev acceleration (Wang 2015) with this spectral radius
+    /// estimate in (0, 1); `None` (default): plain iterations.
+    pub chebyshev: Option<f64>,
+}
+
+impl Default for SolverSettings {
+    fn default() -> Self {
+        SolverSettings::new(Integrator::ImplicitEuler)
+    }
+}
+
+impl SolverSettings {
+    /// The defaults of `integrator` (its default step included).
+    pub fn new(integrator: Integrator) -> SolverSettings {
+        SolverSettings {
+            integrator,
+            dt: integrator.default_dt(),
+            newton_iterations: 1,
+            linear_solver: LinearSolver::Cholesky,
+            cg_tolerance: 1e-6,
+            cg_max_iterations: 1000,
+            iterations: 10,
+            chebyshev: None,
+        }
+    }
+
+    /// The same settings at step `dt`.
+    pub fn with_dt(self, dt: f64) -> SolverSettings {
+        SolverSettings { dt, ..self }
+    }
+}
+
+/// What the solve phase reads: the model, the state at the start of the step and what the
+/// predict phase made of it.
+pub struct StepIn<'a> {
+    /// The model.
+    pub model: &'a ClothModel,
+    /// Positions at the start of the step, m.
+    pub x: &'a [Point3],
+    /// Velocities at the start of the step, m/s.
+    pub v: &'a [Vec3],
+    /// External forces (gravity), N.
+    pub f_ext: &'a [Vec3],
+    /// The inertial positions `x + h v + h^2 f_ext / m` (pinned: `x`), m.
+    pub y: &'a [Point3],
+    /// The objects (contact normals and friction).
+    pub colliders: &'a [Collider],
+    /// The step, s.
+    pub dt: f64,
+}
+
+/// What the solve phase writes: the new positions and velocities, and the contacts (released
+/// when the cloth pulls away).
+pub struct StepOut<'a> {
+    /// New positions, m.
+    pub x: &'a mut [Point3],
+    /// New velocities, m/s.
+    pub v: &'a mut [Vec3],
+    /// Each particle's sliding contact.
+    pub contact: &'a mut [Option<Contact>],
+}
+
+/// Counters of the solve phase, summed over a run.
+#[derive(Debug, Clone, Copy, Default, Serialize)]
+pub struct SolveStats {
+    /// Wall time spent factoring matrices, s.
+    pub factor_seconds: f64,
+    /// Conjugate-gradient iterations (implicit Euler).
+    pub cg_iterations: u64,
+    /// Local/global iterations (projective dynamics).
+    pub pd_iterations: u64,
+}
+
+/// An integrator with what it keeps between steps (a factorisation, scratch vectors).
+pub trait Solver: Send {
+    /// One solve phase from `input` into `out`.
+    fn step(&mut self, input: &StepIn, out: &mut StepOut);
+    /// Whether the collide phase should apply friction from the normal velocity it removes
+    /// (integrators whose solve phase knows no contact).
+    fn friction_in_collide(&self) -> bool {
+        false
+    }
+    /// Counters so far.
+    fn stats(&self) -> SolveStats;
+}
+
+/// The solver of `settings` for a model whose pinned particles sit at `x`.
+pub fn make(settings: &SolverSettings, model: &ClothModel, x: &[Point3]) -> Box<dyn Solver> {
+    match settings.integrator {
+        Integrator::ExplicitEuler | Integrator::Leapfrog => {
+            Box::new(explicit::Explicit::new(settings.integrator))
+        }
+        Integrator::ImplicitEuler => Box::new(implicit::ImplicitEuler::new(settings, model)),
+        Integrator::ProjectiveDynamics => {
+            Box::new(projective::ProjectiveDynamics::new(settings, model, x))
+        }
+    }
+}
+
+/// The outward unit normal of a particle's contact face.
+#[inline]
+pub fn contact_normal(colliders: &[Collider], ct: &Contact) -> Vec3 {
+    colliders[ct.object as usize].plane(ct.face as usize).0 * ct.side
+}
+
+/// The friction coefficient between particle `i` and its contact's object.
+#[inline]
+pub fn contact_friction(colliders: &[Collider], model: &ClothModel, ct: &Contact, i: usize) -> f64 {
+    colliders[ct.object as usize]
+        .friction
+        .unwrap_or(model.friction[i])
+}
+
+/// Coulomb friction on a velocity `v` against a face of outward normal `n`, for a normal impulse
+/// per unit mass `jn` (m/s) and coefficient `mu`: the tangential velocity loses `mu jn`, and
+/// stops if it had less (static friction).
+#[inline]
+pub fn coulomb(v: &mut Vec3, n: &Vec3, jn: f64, mu: f64) {
+    if jn <= 0.0 || mu <= 0.0 {
+        return;
+    }
+    let vn = n * v.dot(n);
+    let vt = *v - vn;
+    let s = vt.norm();
+    let cut = mu * jn;
+    *v = if s <= cut {
+        vn
+    } else {
+        vn + vt * (1.0 - cut / s)
+    };
+}

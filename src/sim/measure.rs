@@ -1,0 +1,137 @@
+//! What a run measures at its end: strain, particles inside objects, clearance, the drape
+//! coefficient.
+
+use super::World;
+use crate::cloth::elements::SpringKind;
+use crate::cloth::model::ClothModel;
+use crate::collide::Collider;
+use crate::math::{Point3, Vec3};
+use crate::mesh::orient::solid_angle;
+use rayon::prelude::*;
+
+/// Largest and mean strain (edge length over rest length, minus one) of the stretch springs.
+pub fn strain(model: &ClothModel, x: &[Point3]) -> (f64, f64) {
+    let s: Vec<f64> = model
+        .springs
+        .iter()
+        .filter(|s| s.kind == SpringKind::Stretch)
+        .map(|s| (x[s.b as usize] - x[s.a as usize]).norm() / s.rest - 1.0)
+        .collect();
+    if s.is_empty() {
+        return (0.0, 0.0);
+    }
+    (
+        s.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+        s.iter().sum::<f64>() / s.len() as f64,
+    )
+}
+
+/// Whether `p` is inside the closed surface of `c`: its generalized winding number is above 1/2
+/// (robust to small holes and to particles near the surface).
+pub fn inside(c: &Collider, p: &Point3) -> bool {
+    if !c.bbox.contains(p, 0.0) {
+        return false;
+    }
+    let w: f64 = (0..c.mesh.faces.len())
+        .map(|f| {
+            let [a, b, cc] = c.mesh.corners(f);
+            solid_angle(p, &a, &b, &cc)
+        })
+        .sum();
+    w / (4.0 * std::f64::consts::PI) > 0.5
+}
+
+/// Particles inside a closed object, per object (`None` for open objects).
+pub fn particles_inside(world: &World) -> Vec<Option<usize>> {
+    world
+        .colliders
+        .iter()
+        .map(|c| {
+            c.closed
+                .then(|| world.state.x.par_iter().filter(|p| inside(c, p)).count())
+        })
+        .collect()
+}
+
+/// The smallest distance of a particle to each object.
+pub fn min_clearance(world: &World) -> Vec<f64> {
+    world
+        .colliders
+        .iter()
+        .map(|c| {
+            let q = crate::mesh::closest::ClosestPoints::new(&c.mesh);
+            world
+                .state
+                .x
+                .par_iter()
+                .map(|p| q.closest(p).distance)
+                .reduce(|| f64::INFINITY, f64::min)
+        })
+        .collect()
+}
+
+/// The drape coefficient of a piece (Cusick): its shadow area on the plane across gravity,
+/// less the disc's area, over its flat area less the disc's. The shadow is the union of its
+/// projected triangles, rasterised at 1/400 of the piece's size.
+pub fn drape_coefficient(world: &World, piece: usize, disc_radius: f64) -> f64 {
+    let m = &world.model;
+    let r = &m.pieces[piece];
+    let g = m.gravity.normalize();
+    let e1 = g
+        .cross(&Vec3::x())
+        .try_normalize(1e-9)
+        .unwrap_or_else(|| g.cross(&Vec3::y()).normalize());
+    let e2 = g.cross(&e1);
+    let pts: Vec<(f64, f64)> = world.state.x[r.first..r.first + r.count]
+        .iter()
+        .map(|p| (p.coords.dot(&e1), p.coords.dot(&e2)))
+        .collect();
+    let (mut x0, mut x1, mut y0, mut y1) = (
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+    );
+    for &(x, y) in &pts {
+        x0 = x0.min(x);
+        x1 = x1.max(x);
+        y0 = y0.min(y);
+        y1 = y1.max(y);
+    }
+    let px = r.area.sqrt() / 400.0;
+    let (nx, ny) = (
+        ((x1 - x0) / px).ceil() as usize + 1,
+        ((y1 - y0) / px).ceil() as usize + 1,
+    );
+    let mut covered = vec![false; nx * ny];
+    for t in &m.triangles[r.first_triangle..r.first_triangle + r.triangles] {
+        let [a, b, c] = t.map(|v| pts[v as usize - r.first]);
+        let (tx0, tx1) = (a.0.min(b.0).min(c.0), a.0.max(b.0).max(c.0));
+        let (ty0, ty1) = (a.1.min(b.1).min(c.1), a.1.max(b.1).max(c.1));
+        let cross = |p: (f64, f64), q: (f64, f64), s: (f64, f64)| {
+            (q.0 - p.0) * (s.1 - p.1) - (q.1 - p.1) * (s.0 - p.0)
+        };
+        let area = cross(a, b, c);
+        if area == 0.0 {
+            continue;
+        }
+        for j in
+            ((ty0 - y0) / px).floor() as usize..=(((ty1 - y0) / px).ceil() as usize).min(ny - 1)
+        {
+            for i in
+                ((tx0 - x0) / px).floor() as usize..=(((tx1 - x0) / px).ceil() as usize).min(nx - 1)
+            {
+                let p = (x0 + (i as f64 + 0.5) * px, y0 + (j as f64 + 0.5) * px);
+                let (w0, w1, w2) = (cross(b, c, p), cross(c, a, p), cross(a, b, p));
+                if (w0 >= 0.0 && w1 >= 0.0 && w2 >= 0.0 && area > 0.0)
+                    || (w0 <= 0.0 && w1 <= 0.0 && w2 <= 0.0 && area < 0.0)
+                {
+                    covered[j * nx + i] = true;
+                }
+            }
+        }
+    }
+    let shadow = covered.iter().filter(|&&c| c).count() as f64 * px * px;
+    let disc = std::f64::consts::PI * disc_radius * disc_radius;
+    (shadow - disc) / (r.area - disc)
+}

@@ -1,0 +1,505 @@
+//! The drape driver: the world of a scene, the one stepping loop, and what a run measures.
+//!
+//! Each step runs in four phases, each a function with a clear input and output:
+//! 1. **predict** ([`predict`]): the external force (gravity) on each particle and its inertial
+//!    position `y = x + h v + h^2 g` (pinned particles stay);
+//! 2. **solve**: the integrator's [`Solver`] turns the state into new positions and velocities
+//!    (explicit: one particle at a time; implicit Euler: Newton and conjugate gradients;
+//!    projective dynamics: local/global iterations on a prefactored matrix);
+//! 3. **collide** ([`collide`]): each particle's segment from its old to its new position is
+//!    tested against the objects it can reach (`collide::contact`: the paper's test, thickness,
+//!    sliding); the cloth's box, grown by twice the largest distance a particle moved in the last
+//!    step, decides which objects are reachable, and an object's grid is built the first time;
+//! 4. **measure**: every [`CHECK_EVERY`] steps the energy watch (`watch`) and the rest test.
+//!
+//! With `until_rest`, the cloth is at rest when its kinetic energy stays below the threshold over
+//! a window of at least 0.05 s and does not rise over it. Parallel loops work on fixed chunks of
+//! particles (`par`), so results do not depend on the number of threads.
+
+pub mod measure;
+pub mod settings;
+pub mod watch;
+
+pub use measure::{drape_coefficient, inside, min_clearance, particles_inside, strain};
+pub use settings::{Cells, Stop};
+pub use watch::Instability;
+
+use crate::cloth::fabric::Fabric;
+use crate::cloth::integrate::{
+    self, Integrator, SolveStats, Solver, SolverSettings, StepIn, StepOut,
+};
+use crate::cloth::model::ClothModel;
+use crate::cloth::pattern;
+use crate::cloth::stability;
+use crate::cloth::state::{ClothState, Contact};
+use crate::collide::contact;
+use crate::collide::Collider;
+use crate::math::{Aabb, Point3, Vec3};
+use crate::mesh::prepare::{prepare, PrepareOptions};
+use crate::mesh::transform::{change_up, Up};
+use crate::par;
+use crate::scene::{Scene, SceneError};
+use serde::Serialize;
+use std::time::Instant;
+
+/// Steps between stability checks (and progress updates) at small steps.
+pub const CHECK_EVERY: u64 = 16;
+
+/// Steps between checks at step `dt`: [`CHECK_EVERY`] below 1 ms, every step from there (a
+/// large step is expensive enough, and an unstable one must be caught early).
+pub fn check_every(dt: f64) -> u64 {
+    if dt >= 1e-3 {
+        1
+    } else {
+        CHECK_EVERY
+    }
+}
+
+/// Particles per work unit of the collide phase: small, because the particles in contact (the
+/// expensive ones) are neighbours in the numbering, and work stealing must spread them.
+pub const COLLISION_CHUNK: usize = 64;
+
+/// Errors of a run.
+#[derive(Debug, thiserror::Error)]
+pub enum SimError {
+    /// The run went unstable.
+    #[error(
+        "the simulation went unstable at step {step} (t = {time:.4} s, {reason}) with {integrator} and dt = {dt:e} s; the largest stable step estimated for these fabrics and spacings is {estimate:.3e} s: {advice}"
+    )]
+    Unstable {
+        step: u64,
+        time: f64,
+        reason: Instability,
+        integrator: Integrator,
+        dt: f64,
+        estimate: f64,
+        advice: String,
+    },
+    /// Writing a frame failed.
+    #[error("writing frame {step}: {message}")]
+    Frame { step: u64, message: String },
+}
+
+/// Everything a run needs.
+#[derive(Debug)]
+pub struct World {
+    /// The cloth model.
+    pub model: ClothModel,
+    /// The cloth state.
+    pub state: ClothState,
+    /// The objects.
+    pub colliders: Vec<Collider>,
+    /// Highest eigenfrequency of the springs at rest, rad/s (an upper bound).
+    pub max_frequency: f64,
+    /// Largest stable step of the scene's integrator, s.
+    pub stable_step: f64,
+    /// Step at which each object's grid was first needed (`None`: never).
+    pub grid_built_at: Vec<Option<u64>>,
+}
+
+/// The rotation of `deg` degrees about x, then y, then z.
+pub fn rotation(deg: [f64; 3]) -> nalgebra::Rotation3<f64> {
+    let [a, b, c] = deg.map(f64::to_radians);
+    nalgebra::Rotation3::from_axis_angle(&Vec3::z_axis(), c)
+        * nalgebra::Rotation3::from_axis_angle(&Vec3::y_axis(), b)
+        * nalgebra::Rotation3::from_axis_angle(&Vec3::x_axis(), a)
+}
+
+/// Builds the world of a validated scene: objects read, prepared and placed; pieces built and
+/// placed; the model assembled.
+pub fn load(scene: &Scene) -> Result<World, SceneError> {
+    // Every piece and every mesh is checked, and all their problems reported together.
+    let mut errors: Vec<SceneError> = Vec::new();
+    let mut pieces = Vec::new();
+    for (i, p) in scene.pieces.iter().enumerate() {
+        match pattern::build(&p.outline, p.spacing, &p.fabric, &p.pins) {
+            Ok(built) => {
+                let r = rotation(p.rotation);
+                let placed: Vec<Point3> = built
+                    .flat
+                    .iter()
+                    .map(|q| Point3::from(p.position + r * Vec3::new(q.x, q.y, 0.0)))
+                    .collect();
+                pieces.push((p.name.clone(), built, p.fabric.clone(), placed));
+            }
+            Err(error) => errors.push(SceneError::Piece {
+                path: scene.path.clone(),
+                key: format!("piece[{}].outline", i + 1),
+                error,
+            }),
+        }
+    }
+    let to_m = crate::mesh::transform::Units::factor(scene.units, crate::mesh::transform::Units::M);
+    let mut meshes = Vec::new();
+    for (i, o) in scene.objects.iter().enumerate() {
+        let key = format!("object[{}].mesh", i + 1);
+        match crate::io::read_mesh(&o.mesh, &crate::io::ReadOptions::default()) {
+            Ok(read) => {
+                let mut mesh = read.mesh;
+                prepare(&mut mesh, &PrepareOptions::default());
+                if mesh.faces.is_empty() {
+                    errors.push(SceneError::Key {
+                        path: scene.path.clone(),
+                        key,
+                        message: format!(
+                            "{}: no faces remain after cleaning: not a surface to collide with",
+                            o.mesh.display()
+                        ),
+                    });
+                    continue;
+                }
+                change_up(&mut mesh, o.up, Up::Z);
+                for p in &mut mesh.positions {
+                    *p = Point3::from(p.coords * (o.scale * to_m) + o.translate);
+                }
+                meshes.push(mesh);
+            }
+            Err(error) => errors.push(SceneError::Mesh {
+                path: scene.path.clone(),
+                key,
+                error,
+            }),
+        }
+    }
+    if !errors.is_empty() {
+        return Err(SceneError::combine(&scene.path, errors));
+    }
+    let (model, x) = ClothModel::assemble(&pieces, scene.gravity);
+    let margin = scene
+        .pieces
+        .iter()
+        .map(|p| p.fabric.thickness)
+        .fold(0.0, f64::max);
+    let cloth_box = Aabb::of_points(&x).expect("pieces have particles");
+    let colliders = scene
+        .objects
+        .iter()
+        .zip(meshes)
+        .map(|(o, mesh)| {
+            let dims = match scene.cells {
+                Cells::Fixed(d) => d,
+                Cells::Auto => {
+                    let obj = mesh.bbox().unwrap();
+                    let height = cloth_box.max.z.max(obj.max.z) - cloth_box.min.z.min(obj.min.z);
+                    let speed = (2.0 * scene.gravity.norm() * height).sqrt();
+                    Collider::auto_dims(&mesh, speed * scene.solver.dt)
+                }
+            };
+            Collider::new(o.name.clone(), mesh, dims, margin, o.friction)
+        })
+        .collect();
+    Ok(World::new(model, x, colliders, scene.solver.integrator))
+}
+
+impl World {
+    /// A world at rest at `x`, with the stability estimate for `integrator`.
+    pub fn new(
+        model: ClothModel,
+        x: Vec<Point3>,
+        colliders: Vec<Collider>,
+        integrator: Integrator,
+    ) -> World {
+        let max_frequency = stability::frequency_bound(&model);
+        let stable_step = integrator.stable_step(max_frequency, stability::min_damping(&model));
+        let n = colliders.len();
+        World {
+            model,
+            state: ClothState::at_rest(x),
+            colliders,
+            max_frequency,
+            stable_step,
+            grid_built_at: vec![None; n],
+        }
+    }
+}
+
+/// What a run measured.
+#[derive(Debug, Clone, Serialize)]
+pub struct RunStats {
+    /// Steps taken.
+    pub steps: u64,
+    /// Simulated time, s.
+    pub time: f64,
+    /// Wall time of the loop, s (the phases below, and building the solver).
+    pub wall_seconds: f64,
+    /// Wall time of the predict phase, s.
+    pub predict_seconds: f64,
+    /// Wall time of the solve phase, s.
+    pub solve_seconds: f64,
+    /// Wall time of the collide phase, s.
+    pub collision_seconds: f64,
+    /// Wall time of the measure phase, s.
+    pub measure_seconds: f64,
+    /// The solver's counters (factorisation time, iterations).
+    pub solver: SolveStats,
+    /// Whether it stopped because the cloth came to rest.
+    pub at_rest: bool,
+}
+
+/// Scratch of the predict phase: external forces and inertial positions.
+#[derive(Debug, Default)]
+pub struct Predicted {
+    /// External force per particle, N.
+    pub f_ext: Vec<Vec3>,
+    /// Inertial position per particle, m.
+    pub y: Vec<Point3>,
+}
+
+/// The predict phase: gravity on each particle, and where it would go without internal forces.
+pub fn predict(model: &ClothModel, state: &ClothState, dt: f64, out: &mut Predicted) {
+    let n = model.len();
+    out.f_ext.resize(n, Vec3::zeros());
+    out.y.resize(n, Point3::origin());
+    let (x, v) = (&state.x, &state.v);
+    let mut dummy = vec![(); n];
+    par::for_chunks3(
+        256,
+        n,
+        &mut out.f_ext[..],
+        &mut out.y[..],
+        &mut dummy[..],
+        |base, fs, ys, _| {
+            for k in 0..fs.len() {
+                let i = base + k;
+                fs[k] = model.gravity * model.mass[i];
+                ys[k] = if model.pinned(i) {
+                    x[i]
+                } else {
+                    x[i] + v[i] * dt + model.gravity * (dt * dt)
+                };
+            }
+        },
+    );
+}
+
+/// Which objects the cloth can reach this step: its box grown by twice the last step's largest
+/// travel (conservative).
+pub fn reachable(x: &[Point3], colliders: &[Collider], travel: f64) -> Vec<bool> {
+    let bx = Aabb::of_points(x).unwrap();
+    let grow = 2.0 * travel + 0.01;
+    colliders
+        .iter()
+        .map(|c| {
+            let m = c.margin * 2.0 + grow;
+            (0..3).all(|k| bx.min[k] <= c.bbox.max[k] + m && bx.max[k] >= c.bbox.min[k] - m)
+        })
+        .collect()
+}
+
+/// The collide phase: every particle's step from `x0` to `x1` (velocity `v1`) against the
+/// reachable objects, contacts kept in `contact`; with `friction`, Coulomb friction from the
+/// normal velocity each contact removed. Returns the largest distance a particle moved.
+#[allow(clippy::too_many_arguments)]
+pub fn collide(
+    model: &ClothModel,
+    colliders: &[Collider],
+    reach: &[bool],
+    friction: bool,
+    dt: f64,
+    x0: &[Point3],
+    x1: &mut [Point3],
+    v1: &mut [Vec3],
+    contact: &mut [Option<Contact>],
+) -> f64 {
+    let any_reach = reach.iter().any(|&r| r);
+    let moved = std::sync::Mutex::new(0.0f64);
+    par::for_chunks3(
+        COLLISION_CHUNK,
+        model.len(),
+        x1,
+        v1,
+        contact,
+        |base, xs, vs, cs| {
+            let mut far: f64 = 0.0;
+            for k in 0..xs.len() {
+                let i = base + k;
+                if any_reach && !model.pinned(i) {
+                    let before = vs[k];
+                    contact::resolve(
+                        colliders,
+                        reach,
+                        &x0[i],
+                        &mut xs[k],
+                        &mut vs[k],
+                        model.thickness[i],
+                        &mut cs[k],
+                    );
+                    if let (true, Some(ct)) = (friction, cs[k]) {
+                        let n = integrate::contact_normal(colliders, &ct);
+                        let jn = (vs[k] - before).dot(&n);
+                        let mu = integrate::contact_friction(colliders, model, &ct, i);
+                        let v_in = vs[k];
+                        integrate::coulomb(&mut vs[k], &n, jn, mu);
+                        // The position follows the velocity friction took away.
+                        xs[k] += (vs[k] - v_in) * dt;
+                    }
+                } else if !any_reach {
+                    cs[k] = None;
+                }
+                far = far.max((xs[k] - x0[i]).norm_squared());
+            }
+            let mut m = moved.lock().unwrap();
+            *m = m.max(far);
+        },
+    );
+    moved.into_inner().unwrap().sqrt()
+}
+
+/// Runs the world with `settings`. `frame(step, world)` is called every `frames` steps;
+/// `progress(step)` at every check.
+pub fn run(
+    world: &mut World,
+    settings: &SolverSettings,
+    stop: Stop,
+    frames: Option<u64>,
+    frame: &mut dyn FnMut(u64, &World) -> Result<(), SimError>,
+    progress: &dyn Fn(u64),
+) -> Result<RunStats, SimError> {
+    let start = Instant::now();
+    let dt = settings.dt;
+    let integrator = settings.integrator;
+    let mut solver: Box<dyn Solver> = integrate::make(settings, &world.model, &world.state.x);
+    let mut x_new = world.state.x.clone();
+    let mut v_new = world.state.v.clone();
+    let mut pred = Predicted::default();
+    let mut watch = watch::Watch::new(world);
+    let mut rest = watch::Rest::new(stop, dt);
+    let mut stats = RunStats {
+        steps: 0,
+        time: 0.0,
+        wall_seconds: 0.0,
+        predict_seconds: 0.0,
+        solve_seconds: 0.0,
+        collision_seconds: 0.0,
+        measure_seconds: 0.0,
+        solver: SolveStats::default(),
+        at_rest: false,
+    };
+    // Largest distance a particle moved in the last step (for the reach test).
+    let mut travel: f64 = 0.0;
+    for step in 1..=stop.max_steps() {
+        let t = Instant::now();
+        predict(&world.model, &world.state, dt, &mut pred);
+        stats.predict_seconds += t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let reach = reachable(&world.state.x, &world.colliders, travel);
+        for (i, r) in reach.iter().enumerate() {
+            if *r && world.grid_built_at[i].is_none() {
+                world.grid_built_at[i] = Some(step);
+            }
+        }
+        {
+            let World {
+                model,
+                state,
+                colliders,
+                ..
+            } = &mut *world;
+            let input = StepIn {
+                model,
+                x: &state.x,
+                v: &state.v,
+                f_ext: &pred.f_ext,
+                y: &pred.y,
+                colliders,
+                dt,
+            };
+            let mut out = StepOut {
+                x: &mut x_new,
+                v: &mut v_new,
+                contact: &mut state.contact,
+            };
+            solver.step(&input, &mut out);
+            stats.solve_seconds += t.elapsed().as_secs_f64();
+            let t = Instant::now();
+            // The work the collide phase does on the cloth (its projections can stretch springs
+            // at large steps) is counted as work put in; explicit steps are too small to need it.
+            let before = (!integrator.is_explicit())
+                .then(|| watch::mechanical(model, &x_new, &v_new, &state.x));
+            travel = collide(
+                model,
+                colliders,
+                &reach,
+                solver.friction_in_collide(),
+                dt,
+                &state.x,
+                &mut x_new,
+                &mut v_new,
+                &mut state.contact,
+            );
+            if let Some(e) = before {
+                watch.add_work(watch::mechanical(model, &x_new, &v_new, &state.x) - e);
+            }
+            if reach.iter().any(|&r| r) {
+                stats.collision_seconds += t.elapsed().as_secs_f64();
+            }
+        }
+        std::mem::swap(&mut world.state.x, &mut x_new);
+        std::mem::swap(&mut world.state.v, &mut v_new);
+        stats.steps = step;
+        if step % check_every(dt) == 0 || step == stop.max_steps() {
+            let t = Instant::now();
+            if let Err(reason) = watch.check(world) {
+                return Err(SimError::Unstable {
+                    step,
+                    time: step as f64 * dt,
+                    reason,
+                    integrator,
+                    dt,
+                    estimate: world.stable_step,
+                    advice: integrator.advice(world.stable_step, world.max_frequency),
+                });
+            }
+            progress(step);
+            let done = rest.at_rest(world);
+            stats.measure_seconds += t.elapsed().as_secs_f64();
+            if done {
+                stats.at_rest = true;
+                break;
+            }
+        }
+        if let Some(k) = frames {
+            if step % k == 0 {
+                frame(step, world)?;
+            }
+        }
+    }
+    stats.time = stats.steps as f64 * dt;
+    stats.wall_seconds = start.elapsed().as_secs_f64();
+    stats.solver = solver.stats();
+    Ok(stats)
+}
+
+/// Runs the world without frames or progress reports.
+pub fn run_quiet(
+    world: &mut World,
+    settings: &SolverSettings,
+    stop: Stop,
+) -> Result<RunStats, SimError> {
+    run(world, settings, stop, None, &mut |_, _| Ok(()), &|_| {})
+}
+
+/// A fabric's largest stable step at a spacing, for a lone flat square piece (the README's
+/// preset table). The leapfrog step is proportional to the spacing (the springs keep their
+/// constants, the masses go with its square):
+///
+/// ```
+/// use drapekit::cloth::{fabric::Fabric, Integrator};
+/// use drapekit::sim::stable_step_for;
+/// let at_1cm = stable_step_for(&Fabric::cotton(), 0.01, Integrator::Leapfrog);
+/// let at_2cm = stable_step_for(&Fabric::cotton(), 0.02, Integrator::Leapfrog);
+/// assert!((at_1cm - 2.95e-5).abs() < 0.05e-5, "{at_1cm}");
+/// assert!((at_2cm / at_1cm - 2.0).abs() < 0.01);
+/// ```
+pub fn stable_step_for(fabric: &Fabric, spacing: f64, integrator: Integrator) -> f64 {
+    let s = 10.0 * spacing;
+    let outline = [(-s, -s), (s, -s), (s, s), (-s, s)].map(|(x, y)| crate::math::Point2::new(x, y));
+    let p = pattern::build(&outline, spacing, fabric, &pattern::Pins::default())
+        .expect("a square piece");
+    let placed = p.flat.iter().map(|q| Point3::new(q.x, q.y, 0.0)).collect();
+    let (m, _) = ClothModel::assemble(
+        &[("probe".into(), p, fabric.clone(), placed)],
+        Vec3::zeros(),
+    );
+    integrator.stable_step(stability::frequency_bound(&m), fabric.damping)
+}

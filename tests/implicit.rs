@@ -1,0 +1,163 @@
+//! The implicit integrators (implicit Euler, projective dynamics): stability at the extremes,
+//! energy, statics against the analytic answer, determinism.
+
+mod common;
+
+use drapekit::cloth::fabric::Fabric;
+use drapekit::cloth::integrate::projective::ProjectiveDynamics;
+use drapekit::cloth::integrate::{Integrator, Solver, SolverSettings, StepIn, StepOut};
+use drapekit::cloth::model::ClothModel;
+use drapekit::cloth::pattern::{self, Pins};
+use drapekit::math::{Point2, Point3, Vec3};
+use drapekit::sim::{self, watch::Watch, Stop, World};
+
+/// A square of `n` x `n` cells at `spacing`, upright, pinned at its top corners or free.
+fn square(fabric: &Fabric, spacing: f64, n: f64, pinned: bool, integrator: Integrator) -> World {
+    let s = 0.5 * n * spacing;
+    let outline = [(-s, -s), (s, -s), (s, s), (-s, s)].map(|(x, y)| Point2::new(x, y));
+    let pins = if pinned {
+        Pins::at(&[Point2::new(-s, s), Point2::new(s, s)])
+    } else {
+        Pins::default()
+    };
+    let p = pattern::build(&outline, spacing, fabric, &pins).unwrap();
+    // Upright, slightly twisted so that bending and shear are loaded from the start.
+    let placed: Vec<Point3> = p
+        .flat
+        .iter()
+        .map(|q| Point3::new(q.x, 0.2 * q.x * q.y / s, q.y))
+        .collect();
+    let (m, x) = ClothModel::assemble(
+        &[("probe".into(), p, fabric.clone(), placed)],
+        Vec3::new(0.0, 0.0, -9.81),
+    );
+    World::new(m, x, Vec::new(), integrator)
+}
+
+fn stiffness(k: f64) -> Fabric {
+    Fabric {
+        stretch: [k, k],
+        shear: 0.1 * k,
+        ..Fabric::cotton()
+    }
+}
+
+#[test]
+fn implicit_integrators_never_blow_up_and_never_gain_energy_at_the_extremes() {
+    for integrator in [Integrator::ImplicitEuler, Integrator::ProjectiveDynamics] {
+        for k in [1.0, 1e4, 1e7] {
+            for dt in [1e-5, 1.0 / 30.0] {
+                for spacing in [0.002, 0.05] {
+                    for pinned in [true, false] {
+                        let mut w = square(&stiffness(k), spacing, 8.0, pinned, integrator);
+                        let watch = Watch::new(&w);
+                        let e0 = watch.energy(&w);
+                        let settings = SolverSettings::new(integrator).with_dt(dt);
+                        let case =
+                            format!("{integrator} k {k} dt {dt} h {spacing} pinned {pinned}");
+                        sim::run_quiet(&mut w, &settings, Stop::Steps(40))
+                            .unwrap_or_else(|e| panic!("{case}: {e}"));
+                        assert!(
+                            w.state.x.iter().all(|p| p.iter().all(|c| c.is_finite())),
+                            "{case}"
+                        );
+                        // Gravity's work is in the energy (measured from the start): the total
+                        // can only fall. A small allowance for the linearised step.
+                        let mass: f64 = w.model.mass.iter().sum();
+                        let scale = mass * 9.81 * 8.0 * spacing;
+                        let e = watch.energy(&w);
+                        assert!(
+                            e <= e0 + 1e-3 * scale,
+                            "{case}: energy {e0} -> {e} (scale {scale})"
+                        );
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn projective_dynamics_never_raises_its_objective() {
+    let mut w = square(
+        &Fabric::cotton(),
+        0.02,
+        10.0,
+        true,
+        Integrator::ProjectiveDynamics,
+    );
+    // Give it motion: a velocity field that stretches and bends.
+    for (i, v) in w.state.v.iter_mut().enumerate() {
+        if !w.model.pinned(i) {
+            let p = w.state.x[i];
+            *v = Vec3::new(p.z * 3.0, -2.0 * p.x, p.x * p.z * 40.0);
+        }
+    }
+    for dt in [1e-3, 1.0 / 30.0] {
+        let settings = SolverSettings {
+            iterations: 40,
+            ..SolverSettings::new(Integrator::ProjectiveDynamics).with_dt(dt)
+        };
+        let mut pd = ProjectiveDynamics::new(&settings, &w.model, &w.state.x);
+        pd.trace = Some(Vec::new());
+        let f_ext: Vec<Vec3> = w.model.mass.iter().map(|&m| w.model.gravity * m).collect();
+        let y: Vec<Point3> = (0..w.model.len())
+            .map(|i| {
+                if w.model.pinned(i) {
+                    w.state.x[i]
+                } else {
+                    w.state.x[i] + w.state.v[i] * dt + w.model.gravity * (dt * dt)
+                }
+            })
+            .collect();
+        let input = StepIn {
+            model: &w.model,
+            x: &w.state.x,
+            v: &w.state.v,
+            f_ext: &f_ext,
+            y: &y,
+            colliders: &[],
+            dt,
+        };
+        let (mut x1, mut v1, mut c1) = (
+            w.state.x.clone(),
+            w.state.v.clone(),
+            w.state.contact.clone(),
+        );
+        pd.step(
+            &input,
+            &mut StepOut {
+                x: &mut x1,
+                v: &mut v1,
+                contact: &mut c1,
+            },
+        );
+        let g = pd.trace.take().unwrap();
+        assert_eq!(g.len(), 41);
+        for k in 1..g.len() {
+            assert!(
+                g[k] <= g[k - 1] * (1.0 + 1e-12) + 1e-15,
+                "dt {dt} iteration {k}: {} -> {}",
+                g[k - 1],
+                g[k]
+            );
+        }
+        assert!(g[40] < g[0], "dt {dt}: it descends");
+    }
+}
+
+#[test]
+fn the_energy_budget_does_not_depend_on_the_height_of_the_scene() {
+    let low = square(&Fabric::cotton(), 0.02, 10.0, true, Integrator::Leapfrog);
+    let mut high = square(&Fabric::cotton(), 0.02, 10.0, true, Integrator::Leapfrog);
+    for p in &mut high.state.x {
+        p.z += 1000.0;
+    }
+    let (a, b) = (Watch::new(&low), Watch::new(&high));
+    assert!((a.budget() - b.budget()).abs() < 1e-9 * a.budget());
+    // The energy is measured from the start: the same at any height.
+    assert!((a.energy(&low) - b.energy(&high)).abs() < 1e-9 * a.budget());
+    // A budget of the order of the cloth's weight times the scene's size, not of its height.
+    let mass: f64 = low.model.mass.iter().sum();
+    assert!(b.budget() < mass * 9.81 * 3.0, "{}", b.budget());
+}
