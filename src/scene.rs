@@ -4,7 +4,7 @@
 //! units = "m"                      # all lengths of the file (not fabric tables): m, cm, mm
 //! gravity = [0.0, 0.0, -9.81]      # length units per s^2 (default: 9.81 m/s^2 down z)
 //! [solver]
-//! integrator = "implicit-euler"    # (default) or "projective-dynamics", "leapfrog",
+//! integrator = "projective-dynamics" # (default) or "implicit-euler", "leapfrog",
 //!                                  # "explicit-euler"
 //! dt = 0.01                        # s (default: the integrator's, `Integrator::default_dt`)
 //! newton_iterations = 1            # implicit Euler: Newton steps per step (1: Baraff-Witkin)
@@ -359,10 +359,10 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
         .map(|name| {
             name.parse().unwrap_or_else(|m| {
                 bad("solver.integrator", m);
-                Integrator::ImplicitEuler
+                Integrator::default()
             })
         })
-        .unwrap_or(Integrator::ImplicitEuler);
+        .unwrap_or_default();
     let mut solver = SolverSettings::new(integrator);
     if let Some(dt) = f.solver.dt {
         solver.dt = positive("solver.dt", dt, solver.dt);

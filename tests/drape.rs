@@ -917,6 +917,41 @@ fn bad_scenes_are_refused_naming_the_file_and_the_key() {
         "bad_cells",
         &(GOOD.to_string() + "[collision]\ncells = [0, 5, 5]\n"),
         &["collision.cells", "1..4096"],
+    ); // Keys of one integrator in a scene that uses another (the default is projective dynamics).
+    refused(
+        "newton_with_the_default",
+        &GOOD.replace("steps = 10", "steps = 10\nnewton_iterations = 3"),
+        &[
+            "solver.newton_iterations",
+            "integrator = \"implicit-euler\" only",
+            "projective-dynamics",
+        ],
+    );
+    refused(
+        "iterations_with_leapfrog",
+        &GOOD.replace(
+            "steps = 10",
+            "steps = 10\nintegrator = \"leapfrog\"\nchebyshev = 0.9",
+        ),
+        &[
+            "solver.iterations",
+            "projective-dynamics\" only",
+            "leapfrog",
+        ],
+    );
+    refused(
+        "chebyshev_out_of_range",
+        &GOOD.replace("steps = 10", "steps = 10\nchebyshev = 1.0"),
+        &["solver.chebyshev", "(0, 1), got 1"],
+    );
+    refused(
+        "unknown_integrator",
+        &GOOD.replace("steps = 10", "steps = 10\nintegrator = \"verlet\""),
+        &[
+            "solver.integrator",
+            "unknown integrator 'verlet'",
+            "projective-dynamics",
+        ],
     );
 }
 

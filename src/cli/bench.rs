@@ -21,6 +21,8 @@ pub enum BenchCommand {
     Fit(FitBench),
     /// The paper's collision-grid table on a torso, and integrator accuracy against step size.
     Drape(super::bench_drape::DrapeBench),
+    /// The peers' scene: a 1 m square of real cotton dropped on a sphere, 1 s, timed.
+    Speed(super::bench_speed::SpeedBench),
 }
 
 /// Arguments of `drapekit bench fit`.
@@ -64,6 +66,7 @@ pub fn run(cmd: BenchCommand) -> anyhow::Result<()> {
         BenchCommand::Convert(a) => bench_convert(a),
         BenchCommand::Fit(a) => super::bench_fit::run(a),
         BenchCommand::Drape(a) => super::bench_drape::run(a),
+        BenchCommand::Speed(a) => super::bench_speed::run(a),
     }
 }
 

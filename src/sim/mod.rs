@@ -402,6 +402,7 @@ pub fn run(
                 f_ext: &pred.f_ext,
                 y: &pred.y,
                 colliders,
+                reach: &reach,
                 dt,
             };
             let mut out = StepOut {

@@ -24,24 +24,57 @@
 //! With few iterations a step can end with more energy than it began with; the velocities are
 //! then scaled back (`energy_budget`), so the energy never grows beyond the work put in.
 //!
-//! Contact is not in the solve: the collide phase puts particles back on the faces after the
-//! step, and applies Coulomb friction from the normal velocity it removed.
+//! **Contact as constraints.** Before the iterations, the particles in contact are those the
+//! step began with and those whose inertial path meets a face (`speculate`, the paper's segment
+//! test). Each gets the fourth paper's inequality constraint, the energy `w/2 |p - t|^2` with
+//! `t` the projection of `p` on the half-space in front of its face at the thickness (so it
+//! pushes, never pulls), and `w` as stiff as the springs at the particle ([`CONTACT_WEIGHT`]
+//! times their sum). The local step projects, the global step sees `w` on the diagonal: the
+//! matrix changes only when the set of particles in contact does, and is then refactored
+//! numerically (the symbolic analysis is kept). Without it (contact found after the step only),
+//! the particles that hit are held while their neighbours fall a whole step further, and a real
+//! fabric's springs stretch far beyond what a few iterations recover.
+//!
+//! **Friction** acts after the iterations, with the contact force `w (t - p)` of each
+//! constraint: its normal part gives the impulse `h f.n / m` of Coulomb's law (`coulomb`); a
+//! particle the face does not push is released.
 
+use super::{contact_friction, contact_normal, coulomb};
 use super::{SolveStats, Solver, SolverSettings, StepIn, StepOut};
 use crate::cloth::model::ClothModel;
+use crate::cloth::state::Contact;
 use crate::math::{Point3, Vec3};
 use crate::par;
 use faer::linalg::solvers::Solve;
-use faer::sparse::{SparseColMat, Triplet};
+use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
+use faer::sparse::{Argsort, Pair, SparseColMat, SymbolicSparseColMat};
 use faer::{Mat, Side};
 use rayon::prelude::*;
+
+/// The contact weight relative to the sum of the spring constants at the particle.
+pub const CONTACT_WEIGHT: f64 = 0.01;
 
 /// Local/global projective dynamics with a prefactored global matrix.
 pub struct ProjectiveDynamics {
     settings: SolverSettings,
     /// The particle of each unknown.
     particle: Vec<u32>,
-    llt: Option<faer::sparse::linalg::solvers::Llt<usize, f64>>,
+    symbolic: SymbolicSparseColMat<usize>,
+    argsort: Argsort<usize>,
+    llt_symbolic: Option<SymbolicLlt<usize>>,
+    /// The matrix's values without contacts, in the order of the pattern's pairs (the
+    /// diagonal of unknown `u` first, at `u`).
+    base: Vec<f64>,
+    values: Vec<f64>,
+    llt: Option<Llt<usize, f64>>,
+    /// Per particle, the contact weight of the factored matrix.
+    factored: Vec<f64>,
+    /// Per particle, the contact weight of this step.
+    weight: Vec<f64>,
+    /// Per particle, the contact constraint's projection.
+    target: Vec<Point3>,
+    /// Per particle, the contact weight it would get (`CONTACT_WEIGHT` times its springs).
+    stiffness: Vec<f64>,
     /// Right-hand side from the pinned particles (constant).
     pinned_rhs: Vec<Vec3>,
     /// Per spring, its projection.
@@ -50,6 +83,8 @@ pub struct ProjectiveDynamics {
     prev: Vec<Point3>,
     prev2: Vec<Point3>,
     rhs: Mat<f64>,
+    /// The contacts of the step.
+    contact: Vec<Option<Contact>>,
     stats: SolveStats,
     /// When set, the objective after each iteration of the last step is recorded here (tests,
     /// the benchmark's convergence table).
@@ -65,16 +100,14 @@ impl ProjectiveDynamics {
         let h = settings.dt;
         let (index, particle) = model.free_unknowns();
         let nu = particle.len();
-        let mut trip: Vec<Triplet<usize, usize, f64>> =
-            Vec::with_capacity(nu + 4 * model.springs.len());
+        let mut pairs: Vec<Pair<usize, usize>> = Vec::with_capacity(nu + 4 * model.springs.len());
+        let mut base = Vec::with_capacity(pairs.capacity());
         let mut pinned_rhs = vec![Vec3::zeros(); n];
+        let mut stiffness = vec![0.0; n];
         for (u, &i) in particle.iter().enumerate() {
             let i = i as usize;
-            trip.push(Triplet::new(
-                u,
-                u,
-                model.mass[i] * (1.0 / (h * h) + model.damping[i] / h),
-            ));
+            pairs.push(Pair::new(u, u));
+            base.push(model.mass[i] * (1.0 / (h * h) + model.damping[i] / h));
         }
         // One linear element: weight w, nodes with coefficients (lower triangle only).
         let mut element = |nodes: &[(usize, f64)], w: f64| {
@@ -88,13 +121,16 @@ impl ProjectiveDynamics {
                     if ib == u32::MAX {
                         pinned_rhs[a] -= x[b].coords * (w * ca * cb);
                     } else if ib <= ia {
-                        trip.push(Triplet::new(ia as usize, ib as usize, w * ca * cb));
+                        pairs.push(Pair::new(ia as usize, ib as usize));
+                        base.push(w * ca * cb);
                     }
                 }
             }
         };
         for s in &model.springs {
             element(&[(s.a as usize, -1.0), (s.b as usize, 1.0)], s.k);
+            stiffness[s.a as usize] += CONTACT_WEIGHT * s.k;
+            stiffness[s.b as usize] += CONTACT_WEIGHT * s.k;
         }
         for e in 0..model.bends() {
             let (lo, hi) = (
@@ -106,29 +142,58 @@ impl ProjectiveDynamics {
                 .collect();
             element(&nodes, model.bend_c[e]);
         }
-        let llt = (nu > 0).then(|| {
-            SparseColMat::<usize, f64>::try_new_from_triplets(nu, nu, &trip)
-                .expect("valid indices")
-                .sp_cholesky(Side::Lower)
-                .expect("the global matrix is positive definite: masses are positive")
+        let (symbolic, argsort) =
+            SymbolicSparseColMat::try_new_from_indices(nu, nu, &pairs).expect("valid indices");
+        let llt_symbolic = (nu > 0).then(|| {
+            SymbolicLlt::try_new(symbolic.as_ref(), Side::Lower).expect("symbolic Cholesky")
         });
-        let stats = SolveStats {
-            factor_seconds: start.elapsed().as_secs_f64(),
-            ..SolveStats::default()
-        };
-        ProjectiveDynamics {
+        let mut pd = ProjectiveDynamics {
             settings: *settings,
             particle,
-            llt,
+            symbolic,
+            argsort,
+            llt_symbolic,
+            values: base.clone(),
+            base,
+            llt: None,
+            factored: vec![0.0; n],
+            weight: vec![0.0; n],
+            target: vec![Point3::origin(); n],
+            stiffness,
             pinned_rhs,
             d: vec![Vec3::zeros(); model.springs.len()],
             p: Vec::new(),
             prev: Vec::new(),
             prev2: Vec::new(),
             rhs: Mat::zeros(nu, 3),
-            stats,
+            contact: Vec::new(),
+            stats: SolveStats::default(),
             trace: None,
+        };
+        pd.factor();
+        pd.stats.factor_seconds = start.elapsed().as_secs_f64();
+        pd
+    }
+
+    /// Factors the matrix with the contact weights `weight` (numerically: the symbolic analysis
+    /// is kept).
+    fn factor(&mut self) {
+        let Some(symbolic) = &self.llt_symbolic else {
+            return;
+        };
+        self.values.clone_from(&self.base);
+        for (u, &i) in self.particle.iter().enumerate() {
+            self.values[u] += self.weight[i as usize];
         }
+        let mat =
+            SparseColMat::new_from_argsort(self.symbolic.clone(), &self.argsort, &self.values)
+                .expect("the pattern's values");
+        self.llt = Some(
+            Llt::try_new_with_symbolic(symbolic.clone(), mat.as_ref(), Side::Lower)
+                .expect("the global matrix is positive definite: masses are positive"),
+        );
+        self.factored.clone_from(&self.weight);
+        self.stats.factorisations += 1;
     }
 
     /// The objective `g(p)` of the step (module notes), J.
@@ -175,7 +240,8 @@ impl ProjectiveDynamics {
                 let m = model.mass[i];
                 let mut r = y[i].coords * (m / (dt * dt))
                     + x[i].coords * (model.damping[i] * m / dt)
-                    + self.pinned_rhs[i];
+                    + self.pinned_rhs[i]
+                    + self.target[i].coords * self.weight[i];
                 for &(_, s) in
                     &model.adj[model.adj_start[i] as usize..model.adj_start[i + 1] as usize]
                 {
@@ -200,6 +266,79 @@ impl ProjectiveDynamics {
         for (u, &i) in self.particle.iter().enumerate() {
             self.p[i as usize] = Point3::new(self.rhs[(u, 0)], self.rhs[(u, 1)], self.rhs[(u, 2)]);
         }
+    }
+}
+
+impl ProjectiveDynamics {
+    /// The contacts of the step: those it began with, and those its inertial paths meet
+    /// (`speculate`); their particles get their weights.
+    fn begin_contacts(&mut self, input: &StepIn, start: &[Option<Contact>]) {
+        let n = input.model.len();
+        self.contact.clear();
+        self.contact.extend_from_slice(start);
+        super::speculate(input, &mut self.contact);
+        for i in 0..n {
+            self.weight[i] = if self.contact[i].is_some() {
+                self.stiffness[i]
+            } else {
+                0.0
+            };
+        }
+    }
+
+    /// The local step of the contact constraints: each particle in contact projected on the
+    /// half-space in front of its face, at the thickness.
+    fn project_contacts(&mut self, input: &StepIn) {
+        let StepIn {
+            model, colliders, ..
+        } = *input;
+        for (i, c) in self.contact.iter().enumerate() {
+            let Some(ct) = c else { continue };
+            let (n, off) = colliders[ct.object as usize].plane(ct.face as usize);
+            let d = ct.side * (self.p[i].coords.dot(&n) - off);
+            let th = model.thickness[i];
+            self.target[i] = if d < th {
+                self.p[i] + n * (ct.side * (th - d))
+            } else {
+                self.p[i]
+            };
+        }
+    }
+
+    /// Coulomb friction from the force `w (t - p)` of each contact constraint at the end of the
+    /// step (module notes); a contact that does not push is released.
+    fn friction(&self, input: &StepIn, out: &mut StepOut) {
+        let StepIn {
+            model,
+            x,
+            colliders,
+            dt,
+            ..
+        } = *input;
+        let (p, t, w) = (&self.p, &self.target, &self.weight);
+        par::for_chunks3(
+            crate::sim::COLLISION_CHUNK,
+            model.len(),
+            &mut out.x[..],
+            &mut out.v[..],
+            &mut out.contact[..],
+            |base, xs, vs, cs| {
+                for k in 0..xs.len() {
+                    let i = base + k;
+                    let Some(ct) = cs[k] else { continue };
+                    let n = contact_normal(colliders, &ct);
+                    let fn_ = (t[i] - p[i]).dot(&n) * w[i];
+                    if fn_ <= 0.0 {
+                        cs[k] = None;
+                        continue;
+                    }
+                    let m = model.mass[i];
+                    let mu = contact_friction(colliders, model, &ct, i);
+                    coulomb(&mut vs[k], &n, fn_ * dt / m, mu);
+                    xs[k] = x[i] + vs[k] * dt;
+                }
+            },
+        );
     }
 }
 
@@ -235,18 +374,34 @@ impl Solver for ProjectiveDynamics {
                 x[i] + input.v[i] * dt
             }
         }));
+        let touching = input.reach.iter().any(|&r| r);
+        if touching {
+            let start = out.contact.to_vec();
+            self.begin_contacts(input, &start);
+        } else {
+            self.weight.iter_mut().for_each(|w| *w = 0.0);
+        }
+        if self.weight != self.factored {
+            let t = std::time::Instant::now();
+            self.factor();
+            self.stats.factor_seconds += t.elapsed().as_secs_f64();
+        }
+        let iterations = self.settings.iterations.max(1);
         let rho = self.settings.chebyshev;
         let mut omega = 1.0;
         if let Some(t) = &mut self.trace {
             t.clear();
             t.push(Self::objective(input, &self.p));
         }
-        for k in 0..self.settings.iterations.max(1) {
+        for k in 0..iterations {
             if rho.is_some() {
                 self.prev2.clone_from(&self.prev);
                 self.prev.clone_from(&self.p);
             }
             self.local(model);
+            if touching {
+                self.project_contacts(input);
+            }
             self.global(input);
             if let Some(rho) = rho {
                 omega = match k {
@@ -279,11 +434,13 @@ impl Solver for ProjectiveDynamics {
                 out.v[i] = (self.p[i] - x[i]) / dt;
             }
         }
-        energy_budget(input, out);
-    }
-
-    fn friction_in_collide(&self) -> bool {
-        true
+        if touching {
+            self.project_contacts(input);
+            out.contact.copy_from_slice(&self.contact);
+            self.friction(input, out);
+        } else {
+            energy_budget(input, out);
+        }
     }
 
     fn stats(&self) -> SolveStats {
