@@ -11,7 +11,8 @@
 //! cg_tolerance = 1e-6              # implicit Euler: relative residual of conjugate gradients
 //! cg_max_iterations = 1000         # implicit Euler
 //! iterations = 10                  # projective dynamics: local/global iterations per step
-//! chebyshev = 0.9                  # projective dynamics: Chebyshev acceleration's rho
+//! anderson = 5                     # projective dynamics: Anderson acceleration's history (0: off)
+//! chebyshev = 0.9                  # projective dynamics, with anderson = 0: Chebyshev's rho
 //! steps = 10000                    # or duration = 1.0 (s), or until_rest = 1e-6 (J, kinetic)
 //! max_steps = 1000000              # with until_rest: give up after this many
 //! [collision]
@@ -133,6 +134,10 @@ struct File {
     report: Option<ReportFile>,
 }
 
+/// The longest history of Anderson acceleration a scene may ask for (each vector is the
+/// size of the cloth; more than a few stop paying).
+pub const MAX_ANDERSON: u32 = 20;
+
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct SolverFile {
@@ -143,6 +148,7 @@ struct SolverFile {
     cg_max_iterations: Option<u32>,
     iterations: Option<u32>,
     chebyshev: Option<f64>,
+    anderson: Option<u32>,
     steps: Option<u64>,
     duration: Option<f64>,
     until_rest: Option<f64>,
@@ -402,8 +408,23 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
             );
         }
     }
+    if let Some(m) = f.solver.anderson {
+        if m <= MAX_ANDERSON {
+            solver.anderson = m;
+        } else {
+            bad(
+                "solver.anderson",
+                format!("must be 0 (off) to {MAX_ANDERSON} vectors of history, got {m}"),
+            );
+        }
+    }
     if let Some(r) = f.solver.chebyshev {
-        if r.is_finite() && r > 0.0 && r < 1.0 {
+        if solver.anderson > 0 {
+            bad(
+                "solver.chebyshev",
+                "needs anderson = 0: the two accelerations do not combine (Anderson is on by default)".into(),
+            );
+        } else if r.is_finite() && r > 0.0 && r < 1.0 {
             solver.chebyshev = Some(r);
         } else {
             bad(
@@ -422,7 +443,9 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
         ),
         (
             "solver.iterations",
-            f.solver.iterations.is_some() || f.solver.chebyshev.is_some(),
+            f.solver.iterations.is_some()
+                || f.solver.chebyshev.is_some()
+                || f.solver.anderson.is_some(),
             Integrator::ProjectiveDynamics,
         ),
     ];

@@ -940,8 +940,18 @@ fn bad_scenes_are_refused_naming_the_file_and_the_key() {
         ],
     );
     refused(
+        "chebyshev_with_anderson",
+        &GOOD.replace("steps = 10", "steps = 10\nchebyshev = 0.9"),
+        &["solver.chebyshev", "needs anderson = 0"],
+    );
+    refused(
+        "anderson_too_deep",
+        &GOOD.replace("steps = 10", "steps = 10\nanderson = 1000"),
+        &["solver.anderson", "0 (off) to 20", "got 1000"],
+    );
+    refused(
         "chebyshev_out_of_range",
-        &GOOD.replace("steps = 10", "steps = 10\nchebyshev = 1.0"),
+        &GOOD.replace("steps = 10", "steps = 10\nanderson = 0\nchebyshev = 1.0"),
         &["solver.chebyshev", "(0, 1), got 1"],
     );
     refused(

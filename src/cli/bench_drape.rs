@@ -102,7 +102,16 @@ pub fn bench_torso(body: &std::path::Path) -> anyhow::Result<TriMesh> {
 
 /// The bench world: the torso and a square of about `particles` particles above its top.
 fn bench_world(torso: &TriMesh, cells: [usize; 3]) -> (World, f64) {
-    let fabric = bench_fabric();
+    torso_world(torso, cells, bench_fabric(), Integrator::Leapfrog)
+}
+
+/// The torso scene with `fabric`: the world, and half the stable step of `integrator`.
+fn torso_world(
+    torso: &TriMesh,
+    cells: [usize; 3],
+    fabric: Fabric,
+    integrator: Integrator,
+) -> (World, f64) {
     let b = torso.bbox().unwrap();
     let side = 0.675;
     let outline = [
@@ -131,9 +140,53 @@ fn bench_world(torso: &TriMesh, cells: [usize; 3]) -> (World, f64) {
         fabric.thickness,
         Some(0.3),
     );
-    let w = World::new(model, x, vec![collider], Integrator::Leapfrog);
+    let w = World::new(model, x, vec![collider], integrator);
     let dt = 0.5 * w.stable_step;
     (w, dt)
+}
+
+/// Wall seconds per simulated second on the torso scene with real cotton: the default solver
+/// over one simulated second, and leapfrog at half its stable step over `steps` steps
+/// (extrapolated to a second: it would take hundreds of thousands of steps).
+#[derive(Debug, Serialize)]
+struct TorsoRow {
+    default_wall_per_second: f64,
+    default_inside: usize,
+    default_max_strain: f64,
+    leapfrog_dt: f64,
+    leapfrog_wall_per_second: f64,
+}
+
+fn torso_per_second(a: &DrapeBench, torso: &TriMesh) -> anyhow::Result<TorsoRow> {
+    let settings = SolverSettings::default();
+    let mut walls = Vec::new();
+    let mut last = None;
+    for _ in 0..a.runs {
+        let (mut w, _) = torso_world(torso, [50, 70, 30], Fabric::cotton(), settings.integrator);
+        let st = sim::run_quiet(&mut w, &settings, Stop::Steps((1.0 / settings.dt) as u64))?;
+        walls.push(st.wall_seconds);
+        last = Some(w);
+    }
+    let w = last.expect("a run");
+    let mut lf = Vec::new();
+    let mut dt = 0.0;
+    for _ in 0..a.runs {
+        let (mut w, h) = torso_world(torso, [50, 70, 30], Fabric::cotton(), Integrator::Leapfrog);
+        dt = h;
+        let st = sim::run_quiet(
+            &mut w,
+            &SolverSettings::new(Integrator::Leapfrog).with_dt(h),
+            Stop::Steps(a.steps),
+        )?;
+        lf.push(st.wall_seconds / (a.steps as f64 * h));
+    }
+    Ok(TorsoRow {
+        default_wall_per_second: median(&walls),
+        default_inside: sim::particles_inside(&w)[0].unwrap_or(0),
+        default_max_strain: sim::strain(&w.model, &w.state.x).0,
+        leapfrog_dt: dt,
+        leapfrog_wall_per_second: median(&lf),
+    })
 }
 
 #[derive(Debug, Serialize)]
@@ -163,6 +216,7 @@ struct Report {
     dt: f64,
     rows: Vec<Row>,
     threads_identical: bool,
+    torso: TorsoRow,
     integrators: Vec<IntegratorRow>,
 }
 
@@ -267,6 +321,18 @@ pub fn run(a: DrapeBench) -> anyhow::Result<()> {
     }
     let identical = by_threads[0] == by_threads[1];
     say(format!("  final positions with 1 and 2 threads identical: {identical}; the same for every grid: true"));
+    let torso_row = torso_per_second(&a, &torso)?;
+    say(format!(
+        "  real cotton on the torso, wall s per simulated second: default ({} at {} s) {:.2} (inside {}, max strain {:.2e}); leapfrog at {:.2e} s {:.1} (from {} steps)",
+        SolverSettings::default().integrator,
+        SolverSettings::default().dt,
+        torso_row.default_wall_per_second,
+        torso_row.default_inside,
+        torso_row.default_max_strain,
+        torso_row.leapfrog_dt,
+        torso_row.leapfrog_wall_per_second,
+        a.steps
+    ));
     let integrators = integrator_table(&a, &say)?;
     if a.json {
         let rep = Report {
@@ -276,6 +342,7 @@ pub fn run(a: DrapeBench) -> anyhow::Result<()> {
             dt,
             rows,
             threads_identical: identical,
+            torso: torso_row,
             integrators,
         };
         println!("{}", serde_json::to_string_pretty(&rep)?);
@@ -336,9 +403,14 @@ fn configurations() -> Vec<(String, SolverSettings)> {
                 ..SolverSettings::new(Integrator::ProjectiveDynamics).with_dt(dt)
             };
             c.push((format!("projective {it} it"), s));
+            c.push((
+                format!("projective {it} it plain"),
+                SolverSettings { anderson: 0, ..s },
+            ));
         }
         let s = SolverSettings {
             iterations: 10,
+            anderson: 0,
             chebyshev: Some(0.9),
             ..SolverSettings::new(Integrator::ProjectiveDynamics).with_dt(dt)
         };

@@ -19,7 +19,8 @@
 //!   stiffness along a thread, about `4 G` on the bias). On a grid-like band this is the grid's
 //!   rule exactly: a thread edge inside the cloth gets `E`, one on the outline `E / 2` (it
 //!   carries half a strip), a lone cell diagonal `2 G` (the shear of the cell's two diagonal
-//!   springs).
+//!   springs). An edge within 22.5 degrees of a thread is a stretch spring, the others shear
+//!   springs (the strain measure counts the stretch springs: on the bias cloth shears).
 //!
 //! **Bending** over one node, the paper's last 4 of the 12 neighbours ([`Bend`] elements):
 //! * a grid particle whose 4 thread neighbours exist gets two elements, along warp and weft,
@@ -39,6 +40,10 @@ use super::fabric::Fabric;
 use crate::math::{orient2d, Point2, Point3};
 use crate::mesh::polygon::triangulate_with_holes;
 use std::collections::HashMap;
+
+/// A band edge within 22.5 degrees of a thread (cosine at least this) is a stretch spring; the
+/// others are on the bias, where woven cloth shears (`SpringKind::Shear`).
+pub const BAND_THREAD_COS: f64 = 0.923_879_532_511_286_7;
 
 /// Grid corners closer than this many spacings to the outline are not kept.
 pub const CLEARANCE: f64 = 0.4;
@@ -579,12 +584,18 @@ pub fn build(
                     0.5 * orient2d(&flat[a as usize], &flat[b as usize], &flat[c as usize]).abs()
                 })
                 .sum();
+            // Near a thread (within 22.5 degrees) it stretches the thread; else it shears.
+            let along = d.x.abs().max(d.y.abs()) / l >= BAND_THREAD_COS;
             add(
                 &mut springs,
                 a,
                 b,
                 fabric.directional_stretch(d.x / l, d.y / l) * tributary / (l * l),
-                SpringKind::Stretch,
+                if along {
+                    SpringKind::Stretch
+                } else {
+                    SpringKind::Shear
+                },
             );
             paired.insert((a, b));
         }

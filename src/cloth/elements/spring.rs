@@ -18,9 +18,9 @@ use serde::Serialize;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum SpringKind {
-    /// Along a thread (or a band edge).
+    /// Along a thread (or a band edge within 22.5 degrees of one).
     Stretch,
-    /// A cell diagonal.
+    /// A cell diagonal (or a band edge on the bias).
     Shear,
 }
 

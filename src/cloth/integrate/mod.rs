@@ -23,6 +23,7 @@
 // Index loops read best in this numerical code (several arrays per particle).
 #![allow(clippy::needless_range_loop)]
 
+pub mod anderson;
 pub mod cg;
 pub mod direct;
 pub mod explicit;
@@ -171,9 +172,16 @@ pub struct SolverSettings {
     /// Projective dynamics: local/global iterations per step (default 10).
     pub iterations: u32,
     /// Projective dynamics: Chebyshev acceleration (Wang 2015) with this spectral radius
-    /// estimate in (0, 1); `None` (default): plain iterations.
+    /// estimate in (0, 1); `None` (default): plain iterations. Ignored with `anderson`.
     pub chebyshev: Option<f64>,
+    /// Projective dynamics: Anderson acceleration with this many vectors of history (0: off;
+    /// default [`ANDERSON_DEPTH`]), each accelerated iterate kept only if it lowers the step's
+    /// objective.
+    pub anderson: u32,
 }
+
+/// The default history of Anderson acceleration.
+pub const ANDERSON_DEPTH: u32 = 5;
 
 impl Default for SolverSettings {
     fn default() -> Self {
@@ -193,6 +201,7 @@ impl SolverSettings {
             cg_max_iterations: 1000,
             iterations: 10,
             chebyshev: None,
+            anderson: ANDERSON_DEPTH,
         }
     }
 
