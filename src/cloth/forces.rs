@@ -34,16 +34,17 @@ pub fn force_on(model: &ClothModel, x: &[Point3], v: &[Vec3], f_ext: &[Vec3], i:
     add_internal(model, x, i, f_ext[i] - v[i] * (model.damping[i] * m))
 }
 
-/// Energy in the springs and bending elements, J.
+/// Energy in the springs and bending elements, J (summed over fixed chunks: the same for any
+/// thread count).
 pub fn spring_energy(model: &ClothModel, x: &[Point3]) -> f64 {
-    model
-        .springs
-        .iter()
-        .map(|s| s.energy(&x[s.a as usize], &x[s.b as usize]))
-        .sum::<f64>()
-        + (0..model.bends())
-            .map(|e| bend::energy(model.bend_c[e], &model.bend_vector(e, x)))
-            .sum::<f64>()
+    let springs = crate::par::sum(model.springs.len(), |s| {
+        let s = &model.springs[s];
+        s.energy(&x[s.a as usize], &x[s.b as usize])
+    });
+    springs
+        + crate::par::sum(model.bends(), |e| {
+            bend::energy(model.bend_c[e], &model.bend_vector(e, x))
+        })
 }
 
 /// Kinetic energy, J.

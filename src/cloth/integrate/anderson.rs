@@ -17,16 +17,19 @@
 
 use crate::math::{Point3, Vec3};
 use nalgebra::{DMatrix, DVector};
-use std::collections::VecDeque;
 
 /// The history of an Anderson-accelerated iteration.
 #[derive(Debug, Default)]
 pub struct Anderson {
     depth: usize,
-    d_f: VecDeque<Vec<Vec3>>,
-    d_g: VecDeque<Vec<Vec3>>,
+    /// Ring buffers of the last differences (`len` of them valid, the newest at `head`).
+    d_f: Vec<Vec<Vec3>>,
+    d_g: Vec<Vec<Vec3>>,
+    len: usize,
+    head: usize,
     last_f: Vec<Vec3>,
     last_g: Vec<Point3>,
+    f: Vec<Vec3>,
     started: bool,
 }
 
@@ -39,50 +42,57 @@ impl Anderson {
     pub fn new(depth: usize) -> Anderson {
         Anderson {
             depth,
+            d_f: vec![Vec::new(); depth],
+            d_g: vec![Vec::new(); depth],
             ..Anderson::default()
         }
     }
 
     /// Forgets the history (a new step, or a rejected iterate).
     pub fn reset(&mut self) {
-        self.d_f.clear();
-        self.d_g.clear();
+        self.len = 0;
         self.started = false;
     }
 
     /// Given the iterate `u` and its image `g = G(u)`, writes the accelerated iterate into
     /// `out` (`g` itself while the history is empty). Returns whether it was accelerated.
     pub fn next(&mut self, u: &[Point3], g: &[Point3], out: &mut Vec<Point3>) -> bool {
-        let f: Vec<Vec3> = g.iter().zip(u).map(|(a, b)| a - b).collect();
+        if self.depth == 0 {
+            out.clone_from(&g.to_vec());
+            return false;
+        }
+        self.f.clear();
+        self.f.extend(g.iter().zip(u).map(|(a, b)| a - b));
         if self.started {
-            let df: Vec<Vec3> = f.iter().zip(&self.last_f).map(|(a, b)| a - b).collect();
-            let dg: Vec<Vec3> = g.iter().zip(&self.last_g).map(|(a, b)| a - b).collect();
-            if self.d_f.len() == self.depth {
-                self.d_f.pop_front();
-                self.d_g.pop_front();
-            }
-            self.d_f.push_back(df);
-            self.d_g.push_back(dg);
+            self.head = (self.head + 1) % self.depth;
+            let (df, dg) = (&mut self.d_f[self.head], &mut self.d_g[self.head]);
+            df.clear();
+            df.extend(self.f.iter().zip(&self.last_f).map(|(a, b)| a - b));
+            dg.clear();
+            dg.extend(g.iter().zip(&self.last_g).map(|(a, b)| a - b));
+            self.len = (self.len + 1).min(self.depth);
         }
         self.started = true;
-        self.last_f = f;
+        std::mem::swap(&mut self.last_f, &mut self.f);
         self.last_g.clear();
         self.last_g.extend_from_slice(g);
         out.clear();
         out.extend_from_slice(g);
-        let m = self.d_f.len();
+        let m = self.len;
         if m == 0 {
             return false;
         }
+        // The valid slots, oldest first.
+        let slot = |j: usize| (self.head + self.depth + 1 - m + j) % self.depth;
         let mut a = DMatrix::<f64>::zeros(m, m);
         let mut b = DVector::<f64>::zeros(m);
         for i in 0..m {
             for j in 0..=i {
-                let v = dot(&self.d_f[i], &self.d_f[j]);
+                let v = dot(&self.d_f[slot(i)], &self.d_f[slot(j)]);
                 a[(i, j)] = v;
                 a[(j, i)] = v;
             }
-            b[i] = dot(&self.d_f[i], &self.last_f);
+            b[i] = dot(&self.d_f[slot(i)], &self.last_f);
         }
         let ridge = 1e-10 * a.trace().max(f64::MIN_POSITIVE);
         for i in 0..m {
@@ -94,8 +104,8 @@ impl Anderson {
         if !theta.iter().all(|t| t.is_finite()) {
             return false;
         }
-        for (j, dg) in self.d_g.iter().enumerate() {
-            for (o, d) in out.iter_mut().zip(dg) {
+        for j in 0..m {
+            for (o, d) in out.iter_mut().zip(&self.d_g[slot(j)]) {
                 *o -= d * theta[j];
             }
         }

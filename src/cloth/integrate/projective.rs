@@ -330,7 +330,10 @@ impl ProjectiveDynamics {
             ..
         } = *input;
         for (i, c) in self.contact.iter().enumerate() {
-            let Some(ct) = c else { continue };
+            let Some(ct) = c else {
+                self.target[i] = self.p[i];
+                continue;
+            };
             self.target[i] = contact_target(
                 &self.p[i],
                 &x[i],
