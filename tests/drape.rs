@@ -8,6 +8,7 @@ use drapekit::cloth::integrate::SolverSettings;
 use drapekit::cloth::Integrator;
 use drapekit::math::{Point3, Vec3};
 use drapekit::scene::{self, Scene};
+use drapekit::sim::reference::elastic_catenary;
 use drapekit::sim::{self, SimError, World};
 use drapekit::sim::{Cells, Stop};
 use serde_json::Value;
@@ -122,29 +123,29 @@ fn square_dropped_on_a_sphere_rests_on_it_outside_radius_plus_thickness() {
     assert!(max < 0.02 && mean.abs() < 0.005, "strain {max} {mean}");
 }
 
+#[test]
+fn real_cotton_drapes_on_the_sphere_with_the_default_solver() {
+    // The README's first command: real cotton, no integrator or step in the scene.
+    let sc = scene_with("cotton_on_sphere.toml", |_| {});
+    assert_eq!(sc.solver, SolverSettings::default());
+    assert_eq!(sc.pieces[0].fabric, Fabric::cotton());
+    let (w, stats) = simulate(&sc);
+    assert!(stats.at_rest, "at rest ({} steps)", stats.steps);
+    assert_eq!(sim::particles_inside(&w), vec![Some(0)]);
+    let th = sc.pieces[0].fabric.thickness;
+    let clearance = sim::min_clearance(&w)[0];
+    assert!(clearance > th - 1e-6, "{clearance}");
+    // The centre of the square rests on the top of the sphere.
+    let top = nearest(&w.state.x, &Point3::new(0.0, 0.0, 1.0));
+    assert!((w.state.x[top].coords.norm() - (0.3 + th)).abs() < 2e-3);
+    assert!(w.state.contact.iter().any(|c| c.is_some()));
+    // Cotton hardly stretches under its own weight: the thread springs stay within 1%.
+    let (max, mean) = sim::strain(&w.model, &w.state.x);
+    assert!(max < 0.01 && mean.abs() < 1e-3, "strain {max} {mean}");
+}
+
 // ---------------------------------------------------------------------------------------------
 // A ribbon hanging from its two ends: an elastic catenary.
-
-/// Irvine's elastic catenary (supports level, `span` apart): the horizontal tension and the
-/// midspan sag of a cable of unstretched length `l0`, weight `w` per unstretched length and
-/// axial stiffness `ea`.
-fn elastic_catenary(l0: f64, span: f64, w: f64, ea: f64) -> (f64, f64) {
-    let total = w * l0;
-    let span_of = |h: f64| h * l0 / ea + 2.0 * (h / w) * (total / (2.0 * h)).asinh();
-    let (mut lo, mut hi): (f64, f64) = (1e-9, 1e9);
-    for _ in 0..300 {
-        let mid = (lo * hi).sqrt();
-        if span_of(mid) > span {
-            hi = mid;
-        } else {
-            lo = mid;
-        }
-    }
-    let h = (lo * hi).sqrt();
-    let sag = total * l0 / (8.0 * ea)
-        + (h * l0 / total) * ((1.0 + (total / (2.0 * h)).powi(2)).sqrt() - 1.0);
-    (h, sag)
-}
 
 /// Hangs the ribbon at `spacing` and `dt`: the midspan sag of its centre line (m), the
 /// horizontal and vertical reactions at one end (N), and the weight of its free particles (N).

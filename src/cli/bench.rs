@@ -23,6 +23,8 @@ pub enum BenchCommand {
     Drape(super::bench_drape::DrapeBench),
     /// The peers' scene: a 1 m square of real cotton dropped on a sphere, 1 s, timed.
     Speed(super::bench_speed::SpeedBench),
+    /// The implicit integrators on real cotton: convergence of a step, damping, statics.
+    Solver(super::bench_solver::SolverBench),
 }
 
 /// Arguments of `drapekit bench fit`.
@@ -67,6 +69,7 @@ pub fn run(cmd: BenchCommand) -> anyhow::Result<()> {
         BenchCommand::Fit(a) => super::bench_fit::run(a),
         BenchCommand::Drape(a) => super::bench_drape::run(a),
         BenchCommand::Speed(a) => super::bench_speed::run(a),
+        BenchCommand::Solver(a) => super::bench_solver::run(a),
     }
 }
 

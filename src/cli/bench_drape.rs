@@ -350,31 +350,6 @@ pub fn run(a: DrapeBench) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn hanging_world(integrator: Integrator) -> World {
-    // Real cotton, as a user drapes it.
-    let fabric = Fabric::cotton();
-    let s = 0.15;
-    let outline = [(-s, -s), (s, -s), (s, s), (-s, s)].map(|(x, y)| Point2::new(x, y));
-    let piece = pattern::build(
-        &outline,
-        0.02,
-        &fabric,
-        &pattern::Pins::at(&[Point2::new(-s, s), Point2::new(s, s)]),
-    )
-    .expect("a square");
-    // Held flat and level by two corners: it falls and swings.
-    let placed: Vec<Point3> = piece
-        .flat
-        .iter()
-        .map(|q| Point3::new(q.x, q.y, 0.0))
-        .collect();
-    let (model, x) = ClothModel::assemble(
-        &[("hang".into(), piece, fabric, placed)],
-        Vec3::new(0.0, 0.0, -9.81),
-    );
-    World::new(model, x, Vec::new(), integrator)
-}
-
 /// The configurations of the speed-against-accuracy table: (label, settings).
 fn configurations() -> Vec<(String, SolverSettings)> {
     let mut c = Vec::new();
@@ -422,7 +397,7 @@ fn configurations() -> Vec<(String, SolverSettings)> {
 fn integrator_table(a: &DrapeBench, say: &dyn Fn(String)) -> anyhow::Result<Vec<IntegratorRow>> {
     let duration = 0.5;
     let dt_ref = 2e-6;
-    let mut reference = hanging_world(Integrator::Leapfrog);
+    let mut reference = super::bench_solver::swinging_square(Integrator::Leapfrog);
     sim::run_quiet(
         &mut reference,
         &SolverSettings::new(Integrator::Leapfrog).with_dt(dt_ref),
@@ -441,7 +416,7 @@ fn integrator_table(a: &DrapeBench, say: &dyn Fn(String)) -> anyhow::Result<Vec<
             let mut error = None;
             let mut estimate = 0.0;
             for _ in 0..a.runs {
-                let mut w = hanging_world(integrator);
+                let mut w = super::bench_solver::swinging_square(integrator);
                 estimate = w.stable_step;
                 let r = sim::run_quiet(
                     &mut w,

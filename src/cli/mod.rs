@@ -5,6 +5,7 @@
 mod bench;
 mod bench_drape;
 mod bench_fit;
+mod bench_solver;
 mod bench_speed;
 mod convert;
 mod drape;

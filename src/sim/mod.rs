@@ -17,6 +17,7 @@
 //! particles (`par`), so results do not depend on the number of threads.
 
 pub mod measure;
+pub mod reference;
 pub mod settings;
 pub mod watch;
 

@@ -334,11 +334,14 @@ impl ProjectiveDynamics {
                 self.target[i] = self.p[i];
                 continue;
             };
+            let c = &colliders[ct.object as usize];
+            let face = nearest_front(c, ct, &self.p[i], model.thickness[i]);
+            let (n, off) = c.plane(face);
             self.target[i] = contact_target(
                 &self.p[i],
                 &x[i],
-                &contact_normal(colliders, ct),
-                ct.side * colliders[ct.object as usize].plane(ct.face as usize).1,
+                &(n * ct.side),
+                ct.side * off,
                 model.thickness[i],
                 contact_friction(colliders, model, ct, i),
             );
@@ -381,6 +384,29 @@ impl ProjectiveDynamics {
             }
         }
     }
+}
+
+/// The face whose half-space constrains a particle in contact with `ct` at `p`. Where the
+/// surface is locally convex (seen from the particle's side), the outside is the union of the
+/// half-spaces of the faces around: the particle is free as soon as it is in front of one of
+/// them, and else is pushed out of the one it is least behind. A lone face's plane, extended
+/// past a convex edge, would hold a particle that goes round the edge (a cloth over a body's
+/// shoulder) at the height of the face it left, stretching its springs by a third. Elsewhere
+/// the contact's own face.
+fn nearest_front(c: &crate::collide::Collider, ct: &Contact, p: &Point3, th: f64) -> usize {
+    let f = ct.face as usize;
+    if ct.side < 0.0 || !c.convex[f] {
+        return f;
+    }
+    let depth = |g: usize| {
+        let (n, off) = c.plane(g);
+        th - (p.coords.dot(&n) - off)
+    };
+    c.ring(f)
+        .iter()
+        .map(|&g| g as usize)
+        .min_by(|&a, &b| depth(a).total_cmp(&depth(b)))
+        .unwrap_or(f)
 }
 
 /// The projection of a contact constraint (module notes): `p` pushed out of the face (outward
