@@ -12,6 +12,7 @@
 //! cg_max_iterations = 1000         # implicit Euler
 //! iterations = 10                  # projective dynamics: local/global iterations per step
 //! anderson = 5                     # projective dynamics: Anderson acceleration's history (0: off)
+//! strain_band = 0.01               # projective dynamics: springs free within 1% of rest length
 //! chebyshev = 0.9                  # projective dynamics, with anderson = 0: Chebyshev's rho
 //! steps = 10000                    # or duration = 1.0 (s), or until_rest = 1e-6 (J, kinetic)
 //! max_steps = 1000000              # with until_rest: give up after this many
@@ -149,6 +150,7 @@ struct SolverFile {
     iterations: Option<u32>,
     chebyshev: Option<f64>,
     anderson: Option<u32>,
+    strain_band: Option<f64>,
     steps: Option<u64>,
     duration: Option<f64>,
     until_rest: Option<f64>,
@@ -408,6 +410,16 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
             );
         }
     }
+    if let Some(b) = f.solver.strain_band {
+        if b.is_finite() && (0.0..1.0).contains(&b) {
+            solver.strain_band = Some(b);
+        } else {
+            bad(
+                "solver.strain_band",
+                format!("must be a strain in [0, 1), got {b}"),
+            );
+        }
+    }
     if let Some(m) = f.solver.anderson {
         if m <= MAX_ANDERSON {
             solver.anderson = m;
@@ -445,7 +457,8 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
             "solver.iterations",
             f.solver.iterations.is_some()
                 || f.solver.chebyshev.is_some()
-                || f.solver.anderson.is_some(),
+                || f.solver.anderson.is_some()
+                || f.solver.strain_band.is_some(),
             Integrator::ProjectiveDynamics,
         ),
     ];

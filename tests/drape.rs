@@ -946,6 +946,11 @@ fn bad_scenes_are_refused_naming_the_file_and_the_key() {
         &["solver.chebyshev", "needs anderson = 0"],
     );
     refused(
+        "strain_band_out_of_range",
+        &GOOD.replace("steps = 10", "steps = 10\nstrain_band = -0.1"),
+        &["solver.strain_band", "[0, 1), got -0.1"],
+    );
+    refused(
         "anderson_too_deep",
         &GOOD.replace("steps = 10", "steps = 10\nanderson = 1000"),
         &["solver.anderson", "0 (off) to 20", "got 1000"],

@@ -77,11 +77,9 @@ fn predicted(w: &World, dt: f64) -> sim::Predicted {
     p
 }
 
-/// One solve phase of `settings` from `w`'s state: the new positions and the step's wall time
-/// (the solver built beforehand).
-fn one_step(w: &World, settings: &SolverSettings, trace: bool) -> (Vec<Point3>, f64, Vec<f64>) {
-    let pred = predicted(w, settings.dt);
-    let input = StepIn {
+/// The solve phase's input for a step of `dt` from `w` (no objects).
+fn step_in<'a>(w: &'a World, pred: &'a sim::Predicted, dt: f64) -> StepIn<'a> {
+    StepIn {
         model: &w.model,
         x: &w.state.x,
         v: &w.state.v,
@@ -89,8 +87,15 @@ fn one_step(w: &World, settings: &SolverSettings, trace: bool) -> (Vec<Point3>, 
         y: &pred.y,
         colliders: &[],
         reach: &[],
-        dt: settings.dt,
-    };
+        dt,
+    }
+}
+
+/// One solve phase of `settings` from `w`'s state: the new positions and the step's wall time
+/// (the solver built beforehand).
+fn one_step(w: &World, settings: &SolverSettings, trace: bool) -> (Vec<Point3>, f64, Vec<f64>) {
+    let pred = predicted(w, settings.dt);
+    let input = step_in(w, &pred, settings.dt);
     let (mut x, mut v, mut c) = (
         w.state.x.clone(),
         w.state.v.clone(),
@@ -119,17 +124,7 @@ fn one_step(w: &World, settings: &SolverSettings, trace: bool) -> (Vec<Point3>, 
 /// The backward Euler objective of positions `p` for a step from `w`.
 fn objective(w: &World, dt: f64, p: &[Point3]) -> f64 {
     let pred = predicted(w, dt);
-    let input = StepIn {
-        model: &w.model,
-        x: &w.state.x,
-        v: &w.state.v,
-        f_ext: &pred.f_ext,
-        y: &pred.y,
-        colliders: &[],
-        reach: &[],
-        dt,
-    };
-    ProjectiveDynamics::objective(&input, p)
+    ProjectiveDynamics::objective(&step_in(w, &pred, dt), p)
 }
 
 fn convergence(a: &SolverBench, say: &dyn Fn(String)) -> anyhow::Result<Vec<ConvergenceRow>> {

@@ -76,6 +76,8 @@ pub struct Phases {
     pub measure_seconds: f64,
     /// Factoring the projective-dynamics matrix, s.
     pub factor_seconds: f64,
+    /// Numeric factorisations (projective dynamics refactors when the contacts change).
+    pub factorisations: u64,
     /// Conjugate-gradient iterations (implicit Euler).
     pub cg_iterations: u64,
     /// Local/global iterations (projective dynamics).
@@ -315,6 +317,7 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
             collision_seconds: stats.collision_seconds,
             measure_seconds: stats.measure_seconds,
             factor_seconds: stats.solver.factor_seconds,
+            factorisations: stats.solver.factorisations,
             cg_iterations: stats.solver.cg_iterations,
             pd_iterations: stats.solver.pd_iterations,
         },

@@ -174,6 +174,9 @@ pub struct SolverSettings {
     /// Projective dynamics: Chebyshev acceleration (Wang 2015) with this spectral radius
     /// estimate in (0, 1); `None` (default): plain iterations. Ignored with `anderson`.
     pub chebyshev: Option<f64>,
+    /// Projective dynamics: each spring projects to the nearest length within this strain of
+    /// its rest length (zero energy inside the band), `None` (default): to its rest length.
+    pub strain_band: Option<f64>,
     /// Projective dynamics: Anderson acceleration with this many vectors of history (0: off;
     /// default [`ANDERSON_DEPTH`]), each accelerated iterate kept only if it lowers the step's
     /// objective.
@@ -201,6 +204,7 @@ impl SolverSettings {
             cg_max_iterations: 1000,
             iterations: 10,
             chebyshev: None,
+            strain_band: None,
             anderson: ANDERSON_DEPTH,
         }
     }
