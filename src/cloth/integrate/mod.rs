@@ -92,7 +92,7 @@ impl Integrator {
     pub fn advice(self, estimate: f64, w: f64) -> String {
         match self {
             Integrator::Leapfrog => format!(
-                "use dt <= {:.2e} s, or a larger spacing, or the implicit-euler integrator (stable at any step)",
+                "use dt <= {:.2e} s, or a larger spacing, or the default projective-dynamics integrator (stable at any step)",
                 0.9 * estimate
             ),
             Integrator::ExplicitEuler => format!(
