@@ -7,6 +7,7 @@ pub mod cli;
 pub mod cloth;
 pub mod collide;
 pub mod fit;
+pub mod garment;
 pub mod io;
 pub mod math;
 pub mod mesh;

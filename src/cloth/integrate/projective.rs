@@ -292,15 +292,11 @@ impl ProjectiveDynamics {
             }
         }
         // x, y and z at once: the three columns are independent solves.
-        if std::env::var_os("MULTI").is_some() {
-            llt.solve_in_place(self.rhs.as_mut());
-        } else {
-            let (c0, rest) = self.rhs.as_mut().split_at_col_mut(1);
-            let (c1, c2) = rest.split_at_col_mut(1);
-            [c0, c1, c2]
-                .into_par_iter()
-                .for_each(|c| llt.solve_in_place(c));
-        }
+        let (c0, rest) = self.rhs.as_mut().split_at_col_mut(1);
+        let (c1, c2) = rest.split_at_col_mut(1);
+        [c0, c1, c2]
+            .into_par_iter()
+            .for_each(|c| llt.solve_in_place(c));
         for (u, &i) in self.particle.iter().enumerate() {
             self.p[i as usize] = Point3::new(self.rhs[(u, 0)], self.rhs[(u, 1)], self.rhs[(u, 2)]);
         }

@@ -1,0 +1,12 @@
+//! GarmentCode sewing patterns: reading, validating and sampling specification JSON files.
+//!
+//! A pattern is a set of flat panels, each a closed loop of straight, Bezier or circular-arc
+//! edges in 2D with a rigid placement in 3D (`R (x, y, 0) + t`, `R = Rz Ry Rx` in degrees),
+//! and stitches that join pairs of edges. [`spec`] reads a file into a typed [`Pattern`] and
+//! reports every problem it finds; [`curve`] evaluates, measures and samples edge curves.
+
+pub mod curve;
+pub mod spec;
+
+pub use curve::Curve;
+pub use spec::{parse, read, Edge, EdgeRef, Panel, Pattern, Problem, SpecError, Stitch};

@@ -1,0 +1,1236 @@
+//! Reading and validating a GarmentCode specification JSON file into a [`Pattern`].
+//!
+//! A relative control point `(u, v)` of an edge from `s` to `e` sits at
+//! `s + u d + v perp(d)` with `d = e - s`, `perp(d) = (-d.y, d.x)`; with
+//! `curvature_coords: "absolute"` it is already in panel coordinates. Both are stored
+//! absolute. A panel point `(x, y)` is placed in 3D at `R (x, y, 0) + t` with
+//! `R = Rz Ry Rx` from the panel's Euler angles in degrees, in the file's units
+//! (`units_in_meter` per metre; 100 means centimetres).
+//!
+//! Validation collects every problem before failing, so one run names them all.
+
+use super::curve::{Curve, DENSE_SEGMENTS};
+use crate::math::{Point2, Point3, Vec2, Vec3};
+use nalgebra::{Rotation3, Vector3};
+use serde::Deserialize;
+use serde_json::Value;
+use std::collections::{BTreeMap, HashMap};
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// Segments per curved edge of the polyline the self-crossing test uses.
+const CROSSING_SEGMENTS: usize = 32;
+
+/// A whole sewing pattern: panels in a fixed order and the stitches between their edges.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Pattern {
+    /// Panels, in `panel_order` when the file gives one, else sorted by name.
+    pub panels: Vec<Panel>,
+    /// Stitches, in file order.
+    pub stitches: Vec<Stitch>,
+    /// Panel units per metre (100: centimetres).
+    pub units_in_meter: f64,
+}
+
+/// One flat piece of cloth: a closed loop of edges through its vertices, and its 3D placement.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Panel {
+    /// The panel's name in the file.
+    pub name: String,
+    /// 2D vertices, panel units.
+    pub vertices: Vec<Point2>,
+    /// Edges; edge k ends where edge k+1 starts, the last ends where the first starts.
+    pub edges: Vec<Edge>,
+    /// Translation `t` of the placement.
+    pub translation: Vec3,
+    /// Euler angles (x, y, z) in degrees of the placement's rotation `R = Rz Ry Rx`.
+    pub rotation_deg: [f64; 3],
+}
+
+/// One edge of a panel: vertex indices and curve.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Edge {
+    /// Index of the start vertex.
+    pub start: usize,
+    /// Index of the end vertex.
+    pub end: usize,
+    /// The curve, control points in panel coordinates.
+    pub curve: Curve,
+}
+
+/// An edge of a panel, by indices into [`Pattern::panels`] and [`Panel::edges`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct EdgeRef {
+    /// Panel index.
+    pub panel: usize,
+    /// Edge index within the panel.
+    pub edge: usize,
+}
+
+/// A seam joining two edges. Without `right_wrong` the edges run opposite ways (a's start
+/// meets b's end); with it, start meets start.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Stitch {
+    /// First edge.
+    pub a: EdgeRef,
+    /// Second edge.
+    pub b: EdgeRef,
+    /// The file's third element `"right_wrong"`.
+    pub right_wrong: bool,
+}
+
+/// Everything that stops a pattern from being read.
+#[derive(Debug, thiserror::Error)]
+pub enum SpecError {
+    /// The file could not be read.
+    #[error("cannot read {}: {source}", path.display())]
+    Read {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// JSON syntax error, or the text ends early.
+    #[error("{}:{line}:{column}: {message}", path.display())]
+    Json {
+        path: PathBuf,
+        line: usize,
+        column: usize,
+        message: String,
+    },
+    /// Valid JSON of the wrong shape (a missing key, a string where a number belongs).
+    #[error("{}:{line}:{column}: {message}", path.display())]
+    Shape {
+        path: PathBuf,
+        line: usize,
+        column: usize,
+        message: String,
+    },
+    /// Well-formed but invalid: every problem found.
+    #[error("{}: {} problem(s):{}", path.display(), problems.len(), problems.iter().map(|p| format!("\n  {p}")).collect::<String>())]
+    Invalid {
+        path: PathBuf,
+        problems: Vec<Problem>,
+    },
+}
+
+/// One thing wrong with a well-formed pattern. Panels are named; edges and stitches are
+/// 0-based indices as in the file.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Problem {
+    /// `properties.units_in_meter` is not a positive finite number.
+    BadUnits { value: f64 },
+    /// `properties.curvature_coords` is neither "relative" nor "absolute".
+    UnknownCurvatureCoords { value: String },
+    /// `panel_order` names a panel that does not exist.
+    UnknownPanelInOrder { name: String },
+    /// A number of a panel is NaN or infinite.
+    NonFinite { panel: String, what: String },
+    /// Fewer than 3 edges.
+    TooFewEdges { panel: String, count: usize },
+    /// An edge names a vertex index past the end of the vertex list.
+    VertexOutOfRange {
+        panel: String,
+        edge: usize,
+        vertex: usize,
+        count: usize,
+    },
+    /// Edge `edge` ends at vertex `end` but edge `next` starts at vertex `next_start`.
+    BrokenLoop {
+        panel: String,
+        edge: usize,
+        end: usize,
+        next: usize,
+        next_start: usize,
+    },
+    /// An unknown `curvature.type`.
+    UnknownCurvature {
+        panel: String,
+        edge: usize,
+        kind: String,
+    },
+    /// `curvature.params` of the wrong shape for its type.
+    BadCurvatureParams {
+        panel: String,
+        edge: usize,
+        message: String,
+    },
+    /// A circular arc whose radius is below half its chord.
+    ArcTooSmall {
+        panel: String,
+        edge: usize,
+        radius: f64,
+        half_chord: f64,
+    },
+    /// The sampled outline crosses itself between these two edges (`edge_a <= edge_b`).
+    SelfCrossing {
+        panel: String,
+        edge_a: usize,
+        edge_b: usize,
+    },
+    /// A stitch is not two edge references plus an optional "right_wrong".
+    MalformedStitch { stitch: usize, message: String },
+    /// A stitch names a panel that does not exist.
+    MissingPanel { stitch: usize, panel: String },
+    /// A stitch names an edge index the panel does not have.
+    MissingEdge {
+        stitch: usize,
+        panel: String,
+        edge: usize,
+        count: usize,
+    },
+    /// A stitch joins an edge to itself.
+    StitchToItself {
+        stitch: usize,
+        panel: String,
+        edge: usize,
+    },
+    /// An edge appears in two stitches.
+    EdgeInTwoStitches {
+        panel: String,
+        edge: usize,
+        first: usize,
+        second: usize,
+    },
+}
+
+impl fmt::Display for Problem {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        use Problem::*;
+        match self {
+            BadUnits { value } => write!(f, "properties.units_in_meter is {value}; it must be a positive number"),
+            UnknownCurvatureCoords { value } => {
+                write!(f, "properties.curvature_coords is '{value}'; expected 'relative' or 'absolute'")
+            }
+            UnknownPanelInOrder { name } => write!(f, "panel_order names panel '{name}', which does not exist"),
+            NonFinite { panel, what } => write!(f, "panel '{panel}': {what} is not a finite number"),
+            TooFewEdges { panel, count } => {
+                write!(f, "panel '{panel}' has {count} edge(s); a panel needs at least 3")
+            }
+            VertexOutOfRange {
+                panel,
+                edge,
+                vertex,
+                count,
+            } => write!(f, "panel '{panel}' edge {edge} names vertex {vertex}, but the panel has {count} vertices"),
+            BrokenLoop {
+                panel,
+                edge,
+                end,
+                next,
+                next_start,
+            } => write!(
+                f,
+                "panel '{panel}': edge {edge} ends at vertex {end} but the next edge {next} starts at vertex {next_start}; the edges must form one closed loop in order"
+            ),
+            UnknownCurvature { panel, edge, kind } => {
+                write!(f, "panel '{panel}' edge {edge}: unknown curvature type '{kind}'")
+            }
+            BadCurvatureParams { panel, edge, message } => {
+                write!(f, "panel '{panel}' edge {edge}: curvature params: {message}")
+            }
+            ArcTooSmall {
+                panel,
+                edge,
+                radius,
+                half_chord,
+            } => write!(
+                f,
+                "panel '{panel}' edge {edge}: arc radius {radius} is smaller than half its chord ({half_chord}), so no circle passes through both ends"
+            ),
+            SelfCrossing { panel, edge_a, edge_b } => {
+                write!(f, "panel '{panel}': the outline crosses itself between edges {edge_a} and {edge_b}")
+            }
+            MalformedStitch { stitch, message } => write!(f, "stitch {stitch}: {message}"),
+            MissingPanel { stitch, panel } => write!(f, "stitch {stitch} names panel '{panel}', which does not exist"),
+            MissingEdge {
+                stitch,
+                panel,
+                edge,
+                count,
+            } => write!(f, "stitch {stitch} names edge {edge} of panel '{panel}', which has {count} edge(s)"),
+            StitchToItself { stitch, panel, edge } => {
+                write!(f, "stitch {stitch} joins edge {edge} of panel '{panel}' to itself")
+            }
+            EdgeInTwoStitches {
+                panel,
+                edge,
+                first,
+                second,
+            } => write!(f, "panel '{panel}' edge {edge} is in two stitches, {first} and {second}; an edge may be in one"),
+        }
+    }
+}
+
+// ---- File shape ------------------------------------------------------------------------
+
+#[derive(Deserialize)]
+struct RawSpec {
+    pattern: RawPattern,
+    #[serde(default)]
+    properties: RawProperties,
+}
+
+#[derive(Deserialize)]
+struct RawPattern {
+    panels: BTreeMap<String, RawPanel>,
+    #[serde(default)]
+    stitches: Vec<Vec<RawStitchPart>>,
+    #[serde(default)]
+    panel_order: Option<Vec<String>>,
+}
+
+#[derive(Deserialize)]
+#[serde(default)]
+struct RawProperties {
+    curvature_coords: String,
+    units_in_meter: f64,
+}
+
+impl Default for RawProperties {
+    fn default() -> Self {
+        RawProperties {
+            curvature_coords: "relative".into(),
+            units_in_meter: 100.0,
+        }
+    }
+}
+
+#[derive(Deserialize)]
+struct RawPanel {
+    vertices: Vec<[f64; 2]>,
+    edges: Vec<RawEdge>,
+    #[serde(default)]
+    translation: [f64; 3],
+    #[serde(default)]
+    rotation: [f64; 3],
+}
+
+#[derive(Deserialize)]
+struct RawEdge {
+    endpoints: [usize; 2],
+    #[serde(default)]
+    curvature: Option<Value>,
+}
+
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum RawStitchPart {
+    End { panel: String, edge: usize },
+    Flag(String),
+}
+
+/// A curvature as written: control points still in the file's coordinates.
+enum RawCurve {
+    Quadratic([f64; 2]),
+    Cubic([f64; 2], [f64; 2]),
+    Circle {
+        radius: f64,
+        large: bool,
+        right: bool,
+    },
+}
+
+// ---- Reading ---------------------------------------------------------------------------
+
+/// Reads and validates the pattern in `path`.
+pub fn read(path: &Path) -> Result<Pattern, SpecError> {
+    let text = std::fs::read_to_string(path).map_err(|source| SpecError::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    parse(&text, path)
+}
+
+/// Parses and validates pattern JSON `text`; `path` only names it in errors.
+pub fn parse(text: &str, path: &Path) -> Result<Pattern, SpecError> {
+    let raw: RawSpec = serde_json::from_str(text).map_err(|e| json_error(e, path))?;
+    let mut problems = Vec::new();
+    let pattern = build(raw, &mut problems);
+    if problems.is_empty() {
+        Ok(pattern)
+    } else {
+        Err(SpecError::Invalid {
+            path: path.to_path_buf(),
+            problems,
+        })
+    }
+}
+
+fn json_error(e: serde_json::Error, path: &Path) -> SpecError {
+    let (path, line, column, message) = (path.to_path_buf(), e.line(), e.column(), e.to_string());
+    match e.classify() {
+        serde_json::error::Category::Data => SpecError::Shape {
+            path,
+            line,
+            column,
+            message,
+        },
+        _ => SpecError::Json {
+            path,
+            line,
+            column,
+            message,
+        },
+    }
+}
+
+fn build(raw: RawSpec, problems: &mut Vec<Problem>) -> Pattern {
+    let units = raw.properties.units_in_meter;
+    if !(units.is_finite() && units > 0.0) {
+        problems.push(Problem::BadUnits { value: units });
+    }
+    let relative = match raw.properties.curvature_coords.as_str() {
+        "relative" => true,
+        "absolute" => false,
+        other => {
+            problems.push(Problem::UnknownCurvatureCoords {
+                value: other.into(),
+            });
+            true
+        }
+    };
+    let order = panel_order(&raw.pattern, problems);
+    let mut by_name = raw.pattern.panels;
+    let panels: Vec<Panel> = order
+        .iter()
+        .filter_map(|name| {
+            by_name
+                .remove(name)
+                .map(|p| build_panel(name, p, relative, problems))
+        })
+        .collect();
+    let stitches = build_stitches(&raw.pattern.stitches, &panels, problems);
+    Pattern {
+        panels,
+        stitches,
+        units_in_meter: units,
+    }
+}
+
+/// `panel_order` (unknown names reported, duplicates dropped) then any unlisted panels by name.
+fn panel_order(raw: &RawPattern, problems: &mut Vec<Problem>) -> Vec<String> {
+    let mut order: Vec<String> = Vec::new();
+    for name in raw.panel_order.iter().flatten() {
+        if !raw.panels.contains_key(name) {
+            problems.push(Problem::UnknownPanelInOrder { name: name.clone() });
+        } else if !order.contains(name) {
+            order.push(name.clone());
+        }
+    }
+    let rest: Vec<String> = raw
+        .panels
+        .keys()
+        .filter(|n| !order.contains(n))
+        .cloned()
+        .collect();
+    order.extend(rest);
+    order
+}
+
+fn build_panel(name: &str, raw: RawPanel, relative: bool, problems: &mut Vec<Problem>) -> Panel {
+    let before = problems.len();
+    let vertices: Vec<Point2> = raw
+        .vertices
+        .iter()
+        .map(|v| Point2::new(v[0], v[1]))
+        .collect();
+    check_finite(name, &raw, problems);
+    let edges: Vec<Edge> = raw
+        .edges
+        .iter()
+        .enumerate()
+        .map(|(k, e)| build_edge(name, k, e, &vertices, relative, problems))
+        .collect();
+    check_loop(name, &edges, problems);
+    let panel = Panel {
+        name: name.to_string(),
+        vertices,
+        edges,
+        translation: Vec3::from(raw.translation),
+        rotation_deg: raw.rotation,
+    };
+    if problems.len() == before {
+        check_arcs(&panel, problems);
+        check_self_crossing(&panel, problems);
+    }
+    panel
+}
+
+fn check_finite(name: &str, raw: &RawPanel, problems: &mut Vec<Problem>) {
+    let mut report = |what: String| {
+        problems.push(Problem::NonFinite {
+            panel: name.into(),
+            what,
+        })
+    };
+    for (i, v) in raw.vertices.iter().enumerate() {
+        if !v.iter().all(|x| x.is_finite()) {
+            report(format!("vertex {i}"));
+        }
+    }
+    if !raw.translation.iter().all(|x| x.is_finite()) {
+        report("translation".into());
+    }
+    if !raw.rotation.iter().all(|x| x.is_finite()) {
+        report("rotation".into());
+    }
+}
+
+fn build_edge(
+    name: &str,
+    k: usize,
+    raw: &RawEdge,
+    vertices: &[Point2],
+    relative: bool,
+    problems: &mut Vec<Problem>,
+) -> Edge {
+    let [start, end] = raw.endpoints;
+    for vertex in [start, end] {
+        if vertex >= vertices.len() {
+            problems.push(Problem::VertexOutOfRange {
+                panel: name.into(),
+                edge: k,
+                vertex,
+                count: vertices.len(),
+            });
+        }
+    }
+    let curve = match (&raw.curvature, vertices.get(start), vertices.get(end)) {
+        (Some(value), Some(s), Some(e)) => match raw_curve(name, k, value) {
+            Ok(rc) => to_curve(rc, s, e, relative),
+            Err(p) => {
+                problems.push(p);
+                Curve::Straight
+            }
+        },
+        _ => Curve::Straight,
+    };
+    if !curve_is_finite(&curve) {
+        problems.push(Problem::NonFinite {
+            panel: name.into(),
+            what: format!("edge {k} curvature"),
+        });
+    }
+    Edge { start, end, curve }
+}
+
+fn curve_is_finite(c: &Curve) -> bool {
+    match c {
+        Curve::Straight => true,
+        Curve::Quadratic(p) => p.iter().all(|x| x.is_finite()),
+        Curve::Cubic(p, q) => p.iter().chain(q.iter()).all(|x| x.is_finite()),
+        Curve::Arc { radius, .. } => radius.is_finite(),
+    }
+}
+
+/// Control points to panel coordinates: `s + u d + v perp(d)` when relative.
+fn to_curve(rc: RawCurve, s: &Point2, e: &Point2, relative: bool) -> Curve {
+    let d = e - s;
+    let place = |[u, v]: [f64; 2]| {
+        if relative {
+            s + d * u + Vec2::new(-d.y, d.x) * v
+        } else {
+            Point2::new(u, v)
+        }
+    };
+    match rc {
+        RawCurve::Quadratic(c) => Curve::Quadratic(place(c)),
+        RawCurve::Cubic(c1, c2) => Curve::Cubic(place(c1), place(c2)),
+        RawCurve::Circle {
+            radius,
+            large,
+            right,
+        } => Curve::Arc {
+            radius,
+            large_arc: large,
+            right,
+        },
+    }
+}
+
+/// Reads a `curvature` value: a bare `[u, v]`, or `{"type": ..., "params": ...}`.
+fn raw_curve(panel: &str, edge: usize, value: &Value) -> Result<RawCurve, Problem> {
+    let bad = |message: &str| Problem::BadCurvatureParams {
+        panel: panel.into(),
+        edge,
+        message: message.into(),
+    };
+    if let Some(p) = pair(value) {
+        return Ok(RawCurve::Quadratic(p));
+    }
+    let kind = value
+        .get("type")
+        .and_then(Value::as_str)
+        .ok_or_else(|| bad("expected [u, v] or an object with 'type' and 'params'"))?;
+    let params = value
+        .get("params")
+        .and_then(Value::as_array)
+        .ok_or_else(|| bad("'params' must be a list"))?;
+    match kind {
+        "quadratic" => match params.as_slice() {
+            [p] => pair(p).map(RawCurve::Quadratic),
+            [_, _] => pair(value.get("params").unwrap_or(&Value::Null)).map(RawCurve::Quadratic),
+            _ => None,
+        }
+        .ok_or_else(|| bad("a quadratic needs [[u, v]]")),
+        "cubic" => match params.as_slice() {
+            [p, q] => pair(p).zip(pair(q)).map(|(p, q)| RawCurve::Cubic(p, q)),
+            _ => None,
+        }
+        .ok_or_else(|| bad("a cubic needs [[u1, v1], [u2, v2]]")),
+        "circle" => match params.as_slice() {
+            [r, l, s] => r
+                .as_f64()
+                .zip(flag(l))
+                .zip(flag(s))
+                .map(|((radius, large), right)| RawCurve::Circle {
+                    radius,
+                    large,
+                    right,
+                }),
+            _ => None,
+        }
+        .ok_or_else(|| bad("a circle needs [radius, large_arc, right]")),
+        other => Err(Problem::UnknownCurvature {
+            panel: panel.into(),
+            edge,
+            kind: other.into(),
+        }),
+    }
+}
+
+fn pair(v: &Value) -> Option<[f64; 2]> {
+    match v.as_array()?.as_slice() {
+        [a, b] => Some([a.as_f64()?, b.as_f64()?]),
+        _ => None,
+    }
+}
+
+/// A 0/1 number or a boolean.
+fn flag(v: &Value) -> Option<bool> {
+    v.as_bool().or_else(|| v.as_f64().map(|x| x != 0.0))
+}
+
+// ---- Panel checks ----------------------------------------------------------------------
+
+fn check_loop(name: &str, edges: &[Edge], problems: &mut Vec<Problem>) {
+    if edges.len() < 3 {
+        problems.push(Problem::TooFewEdges {
+            panel: name.into(),
+            count: edges.len(),
+        });
+    }
+    for (k, e) in edges.iter().enumerate() {
+        let next = (k + 1) % edges.len();
+        if e.end != edges[next].start {
+            problems.push(Problem::BrokenLoop {
+                panel: name.into(),
+                edge: k,
+                end: e.end,
+                next,
+                next_start: edges[next].start,
+            });
+        }
+    }
+}
+
+fn check_arcs(panel: &Panel, problems: &mut Vec<Problem>) {
+    for (k, edge) in panel.edges.iter().enumerate() {
+        if let Curve::Arc { radius, .. } = edge.curve {
+            let (s, e) = panel.endpoints(k);
+            let half_chord = (e - s).norm() / 2.0;
+            if radius < half_chord * (1.0 - 1e-9) {
+                problems.push(Problem::ArcTooSmall {
+                    panel: panel.name.clone(),
+                    edge: k,
+                    radius,
+                    half_chord,
+                });
+            }
+        }
+    }
+}
+
+/// Tests every pair of segments of the sampled closed outline for a proper crossing (each
+/// segment's ends strictly on opposite sides of the other's line); reports each pair of
+/// edges once.
+fn check_self_crossing(panel: &Panel, problems: &mut Vec<Problem>) {
+    let (points, owner) = panel.crossing_polyline();
+    let n = points.len();
+    let mut seen = Vec::new();
+    for i in 0..n {
+        for j in i + 2..n {
+            if i == 0 && j == n - 1 {
+                continue;
+            }
+            let (a, b, c, d) = (
+                &points[i],
+                &points[(i + 1) % n],
+                &points[j],
+                &points[(j + 1) % n],
+            );
+            if crosses(a, b, c, d) {
+                let pair = (owner[i].min(owner[j]), owner[i].max(owner[j]));
+                if !seen.contains(&pair) {
+                    seen.push(pair);
+                    problems.push(Problem::SelfCrossing {
+                        panel: panel.name.clone(),
+                        edge_a: pair.0,
+                        edge_b: pair.1,
+                    });
+                }
+            }
+        }
+    }
+}
+
+fn orient(a: &Point2, b: &Point2, c: &Point2) -> f64 {
+    (b - a).perp(&(c - a))
+}
+
+fn crosses(a: &Point2, b: &Point2, c: &Point2, d: &Point2) -> bool {
+    orient(a, b, c) * orient(a, b, d) < 0.0 && orient(c, d, a) * orient(c, d, b) < 0.0
+}
+
+// ---- Geometry --------------------------------------------------------------------------
+
+impl Edge {
+    /// The point at parameter `t` of this edge of `panel`'s vertices.
+    pub fn point(&self, vertices: &[Point2], t: f64) -> Point2 {
+        self.curve
+            .point(&vertices[self.start], &vertices[self.end], t)
+    }
+
+    /// Arc length of this edge.
+    pub fn length(&self, vertices: &[Point2]) -> f64 {
+        self.curve
+            .length(&vertices[self.start], &vertices[self.end])
+    }
+
+    /// Points at equal arc length, see [`Curve::sample`].
+    pub fn sample(&self, vertices: &[Point2], spacing: f64) -> Vec<Point2> {
+        self.curve
+            .sample(&vertices[self.start], &vertices[self.end], spacing)
+    }
+}
+
+impl Panel {
+    /// Start and end points of edge `k`.
+    pub fn endpoints(&self, k: usize) -> (Point2, Point2) {
+        let e = &self.edges[k];
+        (self.vertices[e.start], self.vertices[e.end])
+    }
+
+    /// The closed outline: every edge sampled at `spacing` (see [`Curve::sample`]), each
+    /// edge's last point dropped as the next edge's first, the first point not repeated.
+    pub fn outline(&self, spacing: f64) -> Vec<Point2> {
+        self.edges
+            .iter()
+            .flat_map(|e| {
+                let mut pts = e.sample(&self.vertices, spacing);
+                pts.pop();
+                pts
+            })
+            .collect()
+    }
+
+    /// Signed area (positive: counter-clockwise) by the shoelace formula
+    /// `½ Σ (x_i y_{i+1} - x_{i+1} y_i)` over the outline with every curved edge as a
+    /// [`DENSE_SEGMENTS`]-segment polyline (exact for straight edges).
+    pub fn signed_area(&self) -> f64 {
+        let pts: Vec<Point2> = self
+            .edges
+            .iter()
+            .flat_map(|e| {
+                let (s, t) = (&self.vertices[e.start], &self.vertices[e.end]);
+                let n = if e.curve == Curve::Straight {
+                    1
+                } else {
+                    DENSE_SEGMENTS
+                };
+                let mut p = e.curve.polyline(s, t, n);
+                p.pop();
+                p
+            })
+            .collect();
+        let n = pts.len();
+        (0..n)
+            .map(|i| pts[i].coords.perp(&pts[(i + 1) % n].coords))
+            .sum::<f64>()
+            / 2.0
+    }
+
+    /// The rotation `R = Rz Ry Rx` of the placement.
+    pub fn rotation(&self) -> Rotation3<f64> {
+        let [x, y, z] = self.rotation_deg.map(f64::to_radians);
+        Rotation3::from_axis_angle(&Vector3::z_axis(), z)
+            * Rotation3::from_axis_angle(&Vector3::y_axis(), y)
+            * Rotation3::from_axis_angle(&Vector3::x_axis(), x)
+    }
+
+    /// A panel point placed in 3D: `R (x, y, 0) + t`, in the file's units.
+    pub fn place(&self, p: Point2) -> Point3 {
+        self.rotation() * Point3::new(p.x, p.y, 0.0) + self.translation
+    }
+
+    /// The closed outline for the self-crossing test, and the edge each segment belongs to.
+    fn crossing_polyline(&self) -> (Vec<Point2>, Vec<usize>) {
+        let mut points = Vec::new();
+        let mut owner = Vec::new();
+        for (k, e) in self.edges.iter().enumerate() {
+            let (s, t) = self.endpoints(k);
+            let n = if e.curve == Curve::Straight {
+                1
+            } else {
+                CROSSING_SEGMENTS
+            };
+            let mut p = e.curve.polyline(&s, &t, n);
+            p.pop();
+            owner.extend(std::iter::repeat_n(k, p.len()));
+            points.extend(p);
+        }
+        (points, owner)
+    }
+}
+
+impl Pattern {
+    /// Index of the panel called `name`.
+    pub fn panel_index(&self, name: &str) -> Option<usize> {
+        self.panels.iter().position(|p| p.name == name)
+    }
+}
+
+// ---- Stitches --------------------------------------------------------------------------
+
+fn build_stitches(
+    raw: &[Vec<RawStitchPart>],
+    panels: &[Panel],
+    problems: &mut Vec<Problem>,
+) -> Vec<Stitch> {
+    let index: HashMap<&str, usize> = panels
+        .iter()
+        .enumerate()
+        .map(|(i, p)| (p.name.as_str(), i))
+        .collect();
+    let mut stitches = Vec::new();
+    let mut used: HashMap<EdgeRef, usize> = HashMap::new();
+    for (i, parts) in raw.iter().enumerate() {
+        let Some((ends, right_wrong)) = stitch_parts(i, parts, problems) else {
+            continue;
+        };
+        let a = resolve(i, ends[0], &index, panels, problems);
+        let b = resolve(i, ends[1], &index, panels, problems);
+        for r in [a, b].into_iter().flatten() {
+            note_use(i, r, &mut used, panels, problems);
+        }
+        if let (Some(a), Some(b)) = (a, b) {
+            if a == b {
+                problems.push(Problem::StitchToItself {
+                    stitch: i,
+                    panel: panels[a.panel].name.clone(),
+                    edge: a.edge,
+                });
+            }
+            stitches.push(Stitch { a, b, right_wrong });
+        }
+    }
+    stitches
+}
+
+/// The two edge ends and the `right_wrong` flag of stitch `i`.
+fn stitch_parts<'a>(
+    i: usize,
+    parts: &'a [RawStitchPart],
+    problems: &mut Vec<Problem>,
+) -> Option<([(&'a str, usize); 2], bool)> {
+    let mut ends = Vec::new();
+    let mut right_wrong = false;
+    for part in parts {
+        match part {
+            RawStitchPart::End { panel, edge } => ends.push((panel.as_str(), *edge)),
+            RawStitchPart::Flag(f) if f == "right_wrong" => right_wrong = true,
+            RawStitchPart::Flag(f) => {
+                problems.push(Problem::MalformedStitch {
+                    stitch: i,
+                    message: format!(
+                        "unknown element '{f}'; only \"right_wrong\" may follow the two edges"
+                    ),
+                });
+                return None;
+            }
+        }
+    }
+    match ends.as_slice() {
+        [a, b] => Some(([*a, *b], right_wrong)),
+        _ => {
+            problems.push(Problem::MalformedStitch {
+                stitch: i,
+                message: format!("{} edge reference(s); a stitch joins exactly 2", ends.len()),
+            });
+            None
+        }
+    }
+}
+
+fn resolve(
+    i: usize,
+    (name, edge): (&str, usize),
+    index: &HashMap<&str, usize>,
+    panels: &[Panel],
+    problems: &mut Vec<Problem>,
+) -> Option<EdgeRef> {
+    let Some(&panel) = index.get(name) else {
+        problems.push(Problem::MissingPanel {
+            stitch: i,
+            panel: name.into(),
+        });
+        return None;
+    };
+    let count = panels[panel].edges.len();
+    if edge >= count {
+        problems.push(Problem::MissingEdge {
+            stitch: i,
+            panel: name.into(),
+            edge,
+            count,
+        });
+        return None;
+    }
+    Some(EdgeRef { panel, edge })
+}
+
+/// Records that stitch `i` uses `r`; reports it when another stitch already does.
+fn note_use(
+    i: usize,
+    r: EdgeRef,
+    used: &mut HashMap<EdgeRef, usize>,
+    panels: &[Panel],
+    problems: &mut Vec<Problem>,
+) {
+    match used.get(&r) {
+        Some(&first) if first != i => problems.push(Problem::EdgeInTwoStitches {
+            panel: panels[r.panel].name.clone(),
+            edge: r.edge,
+            first,
+            second: i,
+        }),
+        Some(_) => {}
+        None => {
+            used.insert(r, i);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const SQUARE_EDGES: &str = r#"[{"endpoints": [0, 1]}, {"endpoints": [1, 2]}, {"endpoints": [2, 3]}, {"endpoints": [3, 0]}]"#;
+    const SQUARE_VERTICES: &str = "[[0, 0], [10, 0], [10, 10], [0, 10]]";
+
+    fn panel_json(vertices: &str, edges: &str) -> String {
+        format!(
+            r#"{{"vertices": {vertices}, "edges": {edges}, "translation": [1, 2, 3], "rotation": [0, 0, 0]}}"#
+        )
+    }
+
+    fn square() -> String {
+        panel_json(SQUARE_VERTICES, SQUARE_EDGES)
+    }
+
+    /// A file with these `"name": panel` entries, stitches and extra pattern keys.
+    fn file(panels: &[(&str, String)], stitches: &str, extra: &str) -> String {
+        let panels: Vec<String> = panels
+            .iter()
+            .map(|(n, p)| format!("\"{n}\": {p}"))
+            .collect();
+        format!(
+            r#"{{"pattern": {{"panels": {{{}}}, "stitches": {stitches}{extra}}},
+ "parameters": {{}}, "parameter_order": [],
+ "properties": {{"curvature_coords": "relative", "units_in_meter": 100}}}}"#,
+            panels.join(", ")
+        )
+    }
+
+    fn problems(text: &str) -> Vec<Problem> {
+        match parse(text, Path::new("test.json")) {
+            Err(SpecError::Invalid { problems, .. }) => problems,
+            other => panic!("expected invalid, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn a_valid_pattern_reads_with_absolute_control_points_and_placement() {
+        let edges = r#"[{"endpoints": [0, 1], "curvature": {"type": "quadratic", "params": [[0.5, -0.2]]}},
+            {"endpoints": [1, 2]}, {"endpoints": [2, 3]}, {"endpoints": [3, 0]}]"#;
+        let text = file(
+            &[("b", panel_json(SQUARE_VERTICES, edges)), ("a", square())],
+            r#"[[{"panel": "a", "edge": 1}, {"panel": "b", "edge": 3}, "right_wrong"]]"#,
+            "",
+        );
+        let p = parse(&text, Path::new("t.json")).unwrap();
+        assert_eq!(
+            p.panels.iter().map(|p| p.name.as_str()).collect::<Vec<_>>(),
+            ["a", "b"]
+        );
+        assert_eq!(p.units_in_meter, 100.0);
+        assert_eq!(
+            p.stitches,
+            [Stitch {
+                a: EdgeRef { panel: 0, edge: 1 },
+                b: EdgeRef { panel: 1, edge: 3 },
+                right_wrong: true
+            }]
+        );
+        // s + 0.5 d - 0.2 perp(d) with s = (0,0), d = (10,0), perp(d) = (0,10).
+        assert_eq!(
+            p.panels[1].edges[0].curve,
+            Curve::Quadratic(Point2::new(5.0, -2.0))
+        );
+        assert!((p.panels[0].signed_area() - 100.0).abs() < 1e-12);
+        assert_eq!(
+            p.panels[0].place(Point2::new(1.0, 1.0)),
+            Point3::new(2.0, 3.0, 3.0)
+        );
+        assert_eq!(p.panels[0].outline(2.5).len(), 16);
+    }
+
+    #[test]
+    fn placement_rotates_z_after_y_after_x() {
+        let mut panel = Panel {
+            name: "p".into(),
+            vertices: vec![],
+            edges: vec![],
+            translation: Vec3::new(0.0, 0.0, 10.0),
+            rotation_deg: [0.0, 90.0, 0.0],
+        };
+        // About y by 90°: (1, 0, 0) -> (0, 0, -1).
+        assert!((panel.place(Point2::new(1.0, 0.0)) - Point3::new(0.0, 0.0, 9.0)).norm() < 1e-12);
+        // Rx(90) first takes (0,1,0) to (0,0,1); then Rz(90) leaves it.
+        panel.rotation_deg = [90.0, 0.0, 90.0];
+        panel.translation = Vec3::zeros();
+        assert!((panel.place(Point2::new(0.0, 1.0)) - Point3::new(0.0, 0.0, 1.0)).norm() < 1e-12);
+        // (1,0,0): Rx leaves it, Rz(90) takes it to (0,1,0).
+        assert!((panel.place(Point2::new(1.0, 0.0)) - Point3::new(0.0, 1.0, 0.0)).norm() < 1e-12);
+    }
+
+    #[test]
+    fn panel_order_is_used_when_given() {
+        let text = file(
+            &[("a", square()), ("b", square())],
+            "[]",
+            r#", "panel_order": ["b", "a"]"#,
+        );
+        let p = parse(&text, Path::new("t.json")).unwrap();
+        assert_eq!(p.panel_index("b"), Some(0));
+        assert_eq!(p.panel_index("a"), Some(1));
+    }
+
+    #[test]
+    fn absolute_coordinates_and_bare_quadratics_are_read() {
+        let edges = r#"[{"endpoints": [0, 1], "curvature": [5, -3]}, {"endpoints": [1, 2]}, {"endpoints": [2, 3]}, {"endpoints": [3, 0]}]"#;
+        let text = file(&[("a", panel_json(SQUARE_VERTICES, edges))], "[]", "")
+            .replace("\"relative\"", "\"absolute\"");
+        let p = parse(&text, Path::new("t.json")).unwrap();
+        assert_eq!(
+            p.panels[0].edges[0].curve,
+            Curve::Quadratic(Point2::new(5.0, -3.0))
+        );
+    }
+
+    #[test]
+    fn a_broken_loop_and_a_bad_vertex_are_reported_together() {
+        let broken = r#"[{"endpoints": [0, 1]}, {"endpoints": [1, 2]}, {"endpoints": [2, 3]}, {"endpoints": [2, 0]}]"#;
+        let out_of_range =
+            r#"[{"endpoints": [0, 1]}, {"endpoints": [1, 7]}, {"endpoints": [7, 0]}]"#;
+        let text = file(
+            &[
+                ("a", panel_json(SQUARE_VERTICES, broken)),
+                ("b", panel_json(SQUARE_VERTICES, out_of_range)),
+            ],
+            "[]",
+            "",
+        );
+        let found = problems(&text);
+        assert_eq!(
+            found,
+            [
+                Problem::BrokenLoop {
+                    panel: "a".into(),
+                    edge: 2,
+                    end: 3,
+                    next: 3,
+                    next_start: 2
+                },
+                Problem::VertexOutOfRange {
+                    panel: "b".into(),
+                    edge: 1,
+                    vertex: 7,
+                    count: 4
+                },
+                Problem::VertexOutOfRange {
+                    panel: "b".into(),
+                    edge: 2,
+                    vertex: 7,
+                    count: 4
+                },
+            ]
+        );
+        assert!(found[0]
+            .to_string()
+            .contains("edge 2 ends at vertex 3 but the next edge 3 starts at vertex 2"));
+    }
+
+    #[test]
+    fn stitch_problems_are_all_reported() {
+        let stitches = r#"[
+            [{"panel": "a", "edge": 1}, {"panel": "b", "edge": 3}],
+            [{"panel": "b", "edge": 3}, {"panel": "a", "edge": 2}],
+            [{"panel": "a", "edge": 0}, {"panel": "zz", "edge": 0}],
+            [{"panel": "a", "edge": 9}, {"panel": "b", "edge": 0}],
+            [{"panel": "b", "edge": 1}, {"panel": "b", "edge": 1}]
+        ]"#;
+        let text = file(&[("a", square()), ("b", square())], stitches, "");
+        let found = problems(&text);
+        assert_eq!(
+            found,
+            [
+                Problem::EdgeInTwoStitches {
+                    panel: "b".into(),
+                    edge: 3,
+                    first: 0,
+                    second: 1
+                },
+                Problem::MissingPanel {
+                    stitch: 2,
+                    panel: "zz".into()
+                },
+                Problem::MissingEdge {
+                    stitch: 3,
+                    panel: "a".into(),
+                    edge: 9,
+                    count: 4
+                },
+                Problem::StitchToItself {
+                    stitch: 4,
+                    panel: "b".into(),
+                    edge: 1
+                },
+            ]
+        );
+        let err = parse(&text, Path::new("t.json")).unwrap_err().to_string();
+        assert!(err.starts_with("t.json: 4 problem(s):"), "{err}");
+        assert!(
+            err.contains("panel 'b' edge 3 is in two stitches, 0 and 1"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn a_self_crossing_outline_and_a_too_small_arc_are_reported() {
+        let bowtie = panel_json("[[0, 0], [2, 2], [2, 0], [0, 2]]", SQUARE_EDGES);
+        let arc_edges = r#"[{"endpoints": [0, 1], "curvature": {"type": "circle", "params": [4, 0, 1]}}, {"endpoints": [1, 2]}, {"endpoints": [2, 3]}, {"endpoints": [3, 0]}]"#;
+        let text = file(
+            &[
+                ("bow", bowtie),
+                ("round", panel_json(SQUARE_VERTICES, arc_edges)),
+            ],
+            "[]",
+            "",
+        );
+        assert_eq!(
+            problems(&text),
+            [
+                Problem::SelfCrossing {
+                    panel: "bow".into(),
+                    edge_a: 0,
+                    edge_b: 2
+                },
+                Problem::ArcTooSmall {
+                    panel: "round".into(),
+                    edge: 0,
+                    radius: 4.0,
+                    half_chord: 5.0
+                },
+            ]
+        );
+    }
+
+    #[test]
+    fn a_curve_bulging_across_the_outline_crosses_it() {
+        // Edge 0's quadratic bulges far up through edge 2 at y = 10.
+        let edges = r#"[{"endpoints": [0, 1], "curvature": {"type": "quadratic", "params": [[0.5, 3.0]]}}, {"endpoints": [1, 2]}, {"endpoints": [2, 3]}, {"endpoints": [3, 0]}]"#;
+        let text = file(&[("a", panel_json(SQUARE_VERTICES, edges))], "[]", "");
+        assert_eq!(
+            problems(&text),
+            [Problem::SelfCrossing {
+                panel: "a".into(),
+                edge_a: 0,
+                edge_b: 2
+            }]
+        );
+    }
+
+    #[test]
+    fn a_syntax_error_gives_line_and_column() {
+        let text = "{\n  \"pattern\": {\n    \"panels\": {,\n  }\n}";
+        match parse(text, Path::new("bad.json")) {
+            Err(SpecError::Json {
+                line, column, path, ..
+            }) => {
+                assert_eq!((line, column), (3, 16));
+                assert_eq!(path, Path::new("bad.json"));
+            }
+            other => panic!("expected a JSON error, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn a_wrong_shape_is_a_shape_error() {
+        let text = r#"{"pattern": {"panels": {"a": {"vertices": "none", "edges": []}}}}"#;
+        assert!(matches!(
+            parse(text, Path::new("t.json")),
+            Err(SpecError::Shape { line: 1, .. })
+        ));
+    }
+
+    #[test]
+    fn real_patterns_parse_and_validate() {
+        let dir = Path::new("/work/shared/realdata/patterns");
+        if !dir.is_dir() {
+            assert!(
+                std::env::var("CI").as_deref() != Ok("true"),
+                "{} is missing",
+                dir.display()
+            );
+            eprintln!(
+                "note: {} is missing; real-pattern test skipped",
+                dir.display()
+            );
+            return;
+        }
+        let expected = [
+            ("dress_pencil", 6, 23),
+            ("hoody_mean", 6, 12),
+            ("js_mean_all", 12, 57),
+            ("shirt_mean", 8, 18),
+        ];
+        for (name, panels, stitches) in expected {
+            let path = dir.join(format!("{name}_specification.json"));
+            let p = read(&path).unwrap_or_else(|e| panic!("{e}"));
+            assert_eq!(
+                (p.panels.len(), p.stitches.len()),
+                (panels, stitches),
+                "{name}"
+            );
+            for panel in &p.panels {
+                let outline = panel.outline(1.0);
+                assert!(outline.len() >= panel.edges.len(), "{name}/{}", panel.name);
+                assert!(panel.signed_area().abs() > 1.0, "{name}/{}", panel.name);
+                for (k, e) in panel.edges.iter().enumerate() {
+                    let (s, t) = panel.endpoints(k);
+                    assert!(e.length(&panel.vertices) >= (t - s).norm() - 1e-9);
+                }
+            }
+        }
+    }
+}
