@@ -160,6 +160,8 @@ pub enum Problem {
         radius: f64,
         half_chord: f64,
     },
+    /// An edge of zero length: both ends the same vertex, or at the same point.
+    ZeroLength { panel: String, edge: usize },
     /// The sampled outline crosses itself between these two edges (`edge_a <= edge_b`).
     SelfCrossing {
         panel: String,
@@ -236,6 +238,9 @@ impl fmt::Display for Problem {
                 f,
                 "panel '{panel}' edge {edge}: arc radius {radius} is smaller than half its chord ({half_chord}), so no circle passes through both ends"
             ),
+            ZeroLength { panel, edge } => {
+                write!(f, "panel '{panel}' edge {edge} has zero length: its ends coincide")
+            }
             SelfCrossing { panel, edge_a, edge_b } => {
                 write!(f, "panel '{panel}': the outline crosses itself between edges {edge_a} and {edge_b}")
             }
@@ -450,6 +455,9 @@ fn build_panel(name: &str, raw: RawPanel, relative: bool, problems: &mut Vec<Pro
     };
     if problems.len() == before {
         check_arcs(&panel, problems);
+        check_lengths(&panel, problems);
+    }
+    if problems.len() == before {
         check_self_crossing(&panel, problems);
     }
     panel
@@ -628,6 +636,25 @@ fn check_loop(name: &str, edges: &[Edge], problems: &mut Vec<Problem>) {
                 end: e.end,
                 next,
                 next_start: edges[next].start,
+            });
+        }
+    }
+}
+
+/// Edges whose ends coincide (relative to the panel's size): a point, not a seam line.
+fn check_lengths(panel: &Panel, problems: &mut Vec<Problem>) {
+    let scale = panel
+        .vertices
+        .iter()
+        .map(|v| v.coords.norm())
+        .fold(0.0, f64::max)
+        .max(f64::MIN_POSITIVE);
+    for (k, edge) in panel.edges.iter().enumerate() {
+        let (s, e) = panel.endpoints(k);
+        if edge.start == edge.end || (e - s).norm() <= 1e-12 * scale {
+            problems.push(Problem::ZeroLength {
+                panel: panel.name.clone(),
+                edge: k,
             });
         }
     }
@@ -1152,6 +1179,26 @@ mod tests {
                     half_chord: 5.0
                 },
             ]
+        );
+    }
+
+    #[test]
+    fn a_zero_length_edge_is_reported() {
+        // Vertices 1 and 2 coincide: edge 1 is a point.
+        let text = file(
+            &[(
+                "flat",
+                panel_json("[[0, 0], [10, 0], [10, 0], [0, 10]]", SQUARE_EDGES),
+            )],
+            "[]",
+            "",
+        );
+        assert_eq!(
+            problems(&text),
+            [Problem::ZeroLength {
+                panel: "flat".into(),
+                edge: 1
+            }]
         );
     }
 
