@@ -149,7 +149,13 @@ impl Curve {
             "sample spacing must be positive, got {spacing}"
         );
         let length = self.length(s, e);
-        let segments = ((length / spacing).ceil() as usize).max(1);
+        self.sample_segments(s, e, ((length / spacing).ceil() as usize).max(1))
+    }
+
+    /// `segments + 1` points (`segments` at least 1) at equal arc length, first exactly `s`,
+    /// last exactly `e`: the sampling of a stitched edge, whose count its partner decides.
+    pub fn sample_segments(&self, s: &Point2, e: &Point2, segments: usize) -> Vec<Point2> {
+        let segments = segments.max(1);
         let mut points = if self.uniform_speed() {
             self.polyline(s, e, segments)
         } else {

@@ -3,9 +3,11 @@
 //! A pattern is a set of flat panels, each a closed loop of straight, Bezier or circular-arc
 //! edges in 2D with a rigid placement in 3D (`R (x, y, 0) + t`, `R = Rz Ry Rx` in degrees),
 //! and stitches that join pairs of edges. [`spec`] reads a file into a typed [`Pattern`] and
-//! reports every problem it finds; [`curve`] evaluates, measures and samples edge curves.
+//! reports every problem it finds; [`curve`] evaluates, measures and samples edge curves;
+//! [`sample`] samples the outlines with the two edges of every stitch paired point to point.
 
 pub mod curve;
+pub mod sample;
 pub mod spec;
 
 pub use curve::Curve;
