@@ -64,6 +64,16 @@ pub fn sample_panel(panel: &Panel, segments: &[usize]) -> SampledPanel {
     }
 }
 
+/// Every panel of `pattern` sampled with `counts` (from [`edge_segments`]).
+pub fn sample_all(pattern: &Pattern, counts: &[Vec<usize>]) -> Vec<SampledPanel> {
+    pattern
+        .panels
+        .iter()
+        .zip(counts)
+        .map(|(panel, c)| sample_panel(panel, c))
+        .collect()
+}
+
 /// The sample pairs a stitch joins: `(i, j)` with `i` a point of the first edge's panel and `j`
 /// of the second's, in order along the first edge.
 pub fn stitch_pairs(sampled: &[SampledPanel], stitch: &Stitch) -> Vec<(usize, usize)> {
@@ -108,12 +118,7 @@ mod tests {
         // unstitched, keeps its 8.
         assert_eq!(counts[0], vec![10, 10, 10, 10]);
         assert_eq!(counts[1], vec![10, 8, 10, 10]);
-        let sampled: Vec<SampledPanel> = p
-            .panels
-            .iter()
-            .zip(&counts)
-            .map(|(panel, c)| sample_panel(panel, c))
-            .collect();
+        let sampled = sample_all(&p, &counts);
         assert_eq!(sampled[0].points.len(), 40);
         let pairs = stitch_pairs(&sampled, &p.stitches[0]);
         assert_eq!(pairs.len(), 11);
@@ -146,12 +151,7 @@ mod tests {
         for name in ["dress_pencil", "hoody_mean", "js_mean_all", "shirt_mean"] {
             let p = crate::garment::read(&dir.join(format!("{name}_specification.json"))).unwrap();
             let counts = edge_segments(&p, 1.0);
-            let sampled: Vec<SampledPanel> = p
-                .panels
-                .iter()
-                .zip(&counts)
-                .map(|(panel, c)| sample_panel(panel, c))
-                .collect();
+            let sampled = sample_all(&p, &counts);
             for st in &p.stitches {
                 let pairs = stitch_pairs(&sampled, st);
                 assert_eq!(pairs.len(), counts[st.a.panel][st.a.edge] + 1, "{name}");
