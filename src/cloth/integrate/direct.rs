@@ -20,6 +20,17 @@ use nalgebra::Matrix3;
 /// The contact penalty relative to the diagonal block's scale.
 pub const PENALTY: f64 = 1e8;
 
+/// Where a block of the pattern comes from.
+#[derive(Clone, Copy)]
+enum Block {
+    /// A particle's diagonal block.
+    Diagonal(usize),
+    /// A spring's off-diagonal block (its Hessian).
+    Spring(usize),
+    /// A bending pair's off-diagonal block, `c w_k w_j I`.
+    Bend(f64),
+}
+
 /// The fixed pattern, its symbolic factorisation and the scratch of the values.
 pub struct BlockSystem {
     /// Unknown of each particle (`u32::MAX`: pinned).
@@ -60,7 +71,7 @@ impl BlockSystem {
     pub fn new(model: &ClothModel) -> BlockSystem {
         let (index, particles) = model.free_unknowns();
         let mut pairs = Vec::new();
-        Self::visit(model, &index, &particles, |a, b| {
+        Self::visit(model, &index, &particles, |a, b, _| {
             block_pairs(a, b, &mut pairs)
         });
         let nu = 3 * particles.len();
@@ -79,21 +90,21 @@ impl BlockSystem {
         }
     }
 
-    /// Calls `f(a, b)` (unknowns, `a >= b`) for every block of the pattern, in a fixed order:
-    /// diagonal blocks, then springs, then bending pairs.
+    /// Calls `f(a, b, block)` (unknowns, `a >= b`) for every block of the pattern, in a fixed
+    /// order: diagonal blocks, then springs, then bending pairs.
     fn visit(
         model: &ClothModel,
         index: &[u32],
         particles: &[u32],
-        mut f: impl FnMut(usize, usize),
+        mut f: impl FnMut(usize, usize, Block),
     ) {
-        for u in 0..particles.len() {
-            f(u, u);
+        for (u, &i) in particles.iter().enumerate() {
+            f(u, u, Block::Diagonal(i as usize));
         }
-        for s in &model.springs {
+        for (k, s) in model.springs.iter().enumerate() {
             let (a, b) = (index[s.a as usize], index[s.b as usize]);
             if a != u32::MAX && b != u32::MAX {
-                f(a.max(b) as usize, a.min(b) as usize);
+                f(a.max(b) as usize, a.min(b) as usize, Block::Spring(k));
             }
         }
         for e in 0..model.bends() {
@@ -108,7 +119,8 @@ impl BlockSystem {
                         index[model.bend_nodes[j] as usize],
                     );
                     if a != u32::MAX && b != u32::MAX && a != b {
-                        f(a.max(b) as usize, a.min(b) as usize);
+                        let w = model.bend_c[e] * model.bend_weights[k] * model.bend_weights[j];
+                        f(a.max(b) as usize, a.min(b) as usize, Block::Bend(w));
                     }
                 }
             }
@@ -129,40 +141,15 @@ impl BlockSystem {
     ) {
         let vals = &mut self.values;
         vals.clear();
-        let (index, particles) = (&self.index, &self.particles);
-        for (u, &i) in particles.iter().enumerate() {
-            block_values(u, u, &diag[i as usize], vals);
-        }
-        for (s, sp) in model.springs.iter().enumerate() {
-            let (a, b) = (index[sp.a as usize], index[sp.b as usize]);
-            if a != u32::MAX && b != u32::MAX {
-                block_values(a.max(b) as usize, a.min(b) as usize, &(hess[s] * -h2), vals);
-            }
-        }
-        for e in 0..model.bends() {
-            let (lo, hi) = (
-                model.bend_start[e] as usize,
-                model.bend_start[e + 1] as usize,
-            );
-            for k in lo..hi {
-                for j in lo..k {
-                    let (a, b) = (
-                        index[model.bend_nodes[k] as usize],
-                        index[model.bend_nodes[j] as usize],
-                    );
-                    if a != u32::MAX && b != u32::MAX && a != b {
-                        let w =
-                            h2 * model.bend_c[e] * model.bend_weights[k] * model.bend_weights[j];
-                        block_values(
-                            a.max(b) as usize,
-                            a.min(b) as usize,
-                            &(Matrix3::identity() * w),
-                            vals,
-                        );
-                    }
-                }
-            }
-        }
+        Self::visit(model, &self.index, &self.particles, |a, b, block| {
+            let m = match block {
+                Block::Diagonal(i) => diag[i],
+                Block::Spring(s) => hess[s] * -h2,
+                Block::Bend(w) => Matrix3::identity() * (h2 * w),
+            };
+            block_values(a, b, &m, vals);
+        });
+        let particles = &self.particles;
         let mat = SparseColMat::new_from_argsort(self.symbolic.clone(), &self.argsort, vals)
             .expect("the pattern's values");
         let llt = Llt::try_new_with_symbolic(self.llt_symbolic.clone(), mat.as_ref(), Side::Lower)
