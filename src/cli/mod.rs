@@ -10,6 +10,7 @@ mod bench_speed;
 mod convert;
 mod drape;
 mod fit;
+mod garment;
 mod inspect;
 
 use crate::io::Format;
@@ -44,6 +45,8 @@ pub enum Command {
     Fit(fit::FitArgs),
     /// Drape cloth on objects: the particle simulator with the paper's collision grid.
     Drape(drape::DrapeArgs),
+    /// Sew a GarmentCode pattern on a body and let it hang (no scene file needed).
+    Garment(garment::GarmentArgs),
     /// Benchmarks (speed against a baseline in the same run).
     #[command(subcommand)]
     Bench(bench::BenchCommand),
@@ -99,6 +102,7 @@ pub fn main() -> ExitCode {
         Command::Inspect(a) => inspect::run(a),
         Command::Fit(a) => fit::run(a),
         Command::Drape(a) => drape::run(a),
+        Command::Garment(a) => garment::run(a),
         Command::Bench(b) => bench::run(b),
     };
     match result {

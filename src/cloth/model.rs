@@ -129,9 +129,33 @@ impl ClothModel {
                 .extend(p.triangles.iter().map(|t| t.map(|v| v + off)));
             x.extend_from_slice(placed);
         }
-        let n = m.mass.len();
+        m.index_springs();
+        m.index_bends();
+        (m, x)
+    }
+
+    /// Adds bending elements (across seams, say) over existing particles.
+    pub fn add_bends(&mut self, bends: &[super::elements::Bend]) {
+        for e in bends {
+            self.bend_nodes.extend_from_slice(&e.nodes);
+            self.bend_weights.extend_from_slice(&e.weights);
+            self.bend_c.push(e.c);
+            self.bend_start.push(self.bend_nodes.len() as u32);
+        }
+        self.index_bends();
+    }
+
+    /// Adds springs (seams, say) between existing particles.
+    pub fn add_springs(&mut self, springs: &[Spring]) {
+        self.springs.extend_from_slice(springs);
+        self.index_springs();
+    }
+
+    /// Rebuilds `adj_start` and `adj` from the springs.
+    fn index_springs(&mut self) {
+        let n = self.mass.len();
         let mut count = vec![0u32; n + 1];
-        for s in &m.springs {
+        for s in &self.springs {
             count[s.a as usize + 1] += 1;
             count[s.b as usize + 1] += 1;
         }
@@ -139,32 +163,36 @@ impl ClothModel {
             count[i + 1] += count[i];
         }
         let mut fill = count.clone();
-        m.adj = vec![(0, 0); count[n] as usize];
-        for (si, s) in m.springs.iter().enumerate() {
+        self.adj = vec![(0, 0); count[n] as usize];
+        for (si, s) in self.springs.iter().enumerate() {
             for (p, q) in [(s.a, s.b), (s.b, s.a)] {
-                m.adj[fill[p as usize] as usize] = (q, si as u32);
+                self.adj[fill[p as usize] as usize] = (q, si as u32);
                 fill[p as usize] += 1;
             }
         }
-        m.adj_start = count;
+        self.adj_start = count;
+    }
+
+    /// Rebuilds `bend_adj_start` and `bend_adj` from the bending elements.
+    fn index_bends(&mut self) {
+        let n = self.mass.len();
         let mut count = vec![0u32; n + 1];
-        for &v in &m.bend_nodes {
+        for &v in &self.bend_nodes {
             count[v as usize + 1] += 1;
         }
         for i in 0..n {
             count[i + 1] += count[i];
         }
         let mut fill = count.clone();
-        m.bend_adj = vec![(0, 0.0); count[n] as usize];
-        for e in 0..m.bend_c.len() {
-            for k in m.bend_start[e] as usize..m.bend_start[e + 1] as usize {
-                let v = m.bend_nodes[k] as usize;
-                m.bend_adj[fill[v] as usize] = (e as u32, m.bend_weights[k]);
+        self.bend_adj = vec![(0, 0.0); count[n] as usize];
+        for e in 0..self.bend_c.len() {
+            for k in self.bend_start[e] as usize..self.bend_start[e + 1] as usize {
+                let v = self.bend_nodes[k] as usize;
+                self.bend_adj[fill[v] as usize] = (e as u32, self.bend_weights[k]);
                 fill[v] += 1;
             }
         }
-        m.bend_adj_start = count;
-        (m, x)
+        self.bend_adj_start = count;
     }
 
     /// Number of particles.

@@ -6,7 +6,10 @@
 //! reports every problem it finds; [`curve`] evaluates, measures and samples edge curves;
 //! [`sample`] samples the outlines with the two edges of every stitch paired point to point.
 
+pub mod assemble;
 pub mod curve;
+pub mod drape;
+pub mod measure;
 pub mod sample;
 pub mod spec;
 

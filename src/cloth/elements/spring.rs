@@ -22,6 +22,8 @@ pub enum SpringKind {
     Stretch,
     /// A cell diagonal (or a band edge on the bias).
     Shear,
+    /// A seam: rest length 0 between the two sides' particles of a stitch.
+    Seam,
 }
 
 /// A linear spring `F = k (|d| - rest) d / |d|`.

@@ -25,6 +25,7 @@
 
 pub mod anderson;
 pub mod cg;
+pub mod cholesky;
 pub mod direct;
 pub mod explicit;
 pub mod implicit;

@@ -50,16 +50,13 @@
 //! (applied after the iterations, it held particles where the solve had let them slide, and
 //! stretched real cotton by 7%). A particle the face does not push at the end is released.
 
+use super::cholesky::Cholesky;
 use super::{contact_friction, contact_normal};
 use super::{SolveStats, Solver, SolverSettings, StepIn, StepOut};
 use crate::cloth::model::ClothModel;
 use crate::cloth::state::Contact;
 use crate::math::{Point3, Vec3};
 use crate::par;
-use faer::linalg::solvers::Solve;
-use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
-use faer::sparse::{Argsort, Pair, SparseColMat, SymbolicSparseColMat};
-use faer::{Mat, Side};
 use rayon::prelude::*;
 
 /// The contact weight relative to the particle's inertia `m / h^2`. Its weight presses a
@@ -75,14 +72,12 @@ pub struct ProjectiveDynamics {
     settings: SolverSettings,
     /// The particle of each unknown.
     particle: Vec<u32>,
-    symbolic: SymbolicSparseColMat<usize>,
-    argsort: Argsort<usize>,
-    llt_symbolic: Option<SymbolicLlt<usize>>,
+    /// The global matrix's factorisation (none without unknowns).
+    chol: Option<Cholesky>,
     /// The matrix's values without contacts, in the order of the pattern's pairs (the
     /// diagonal of unknown `u` first, at `u`).
     base: Vec<f64>,
     values: Vec<f64>,
-    llt: Option<Llt<usize, f64>>,
     /// Per particle, the contact weight of the factored matrix.
     factored: Vec<f64>,
     /// Per particle, the contact weight of this step.
@@ -96,7 +91,8 @@ pub struct ProjectiveDynamics {
     p: Vec<Point3>,
     prev: Vec<Point3>,
     prev2: Vec<Point3>,
-    rhs: Mat<f64>,
+    /// The global step's right-hand side, then its solution, per unknown.
+    rhs: Vec<[f64; 3]>,
     /// The contacts of the step.
     contact: Vec<Option<Contact>>,
     /// Anderson acceleration's history, and scratch for the iterate and its acceleration.
@@ -118,12 +114,12 @@ impl ProjectiveDynamics {
         let h = settings.dt;
         let (index, particle) = model.free_unknowns();
         let nu = particle.len();
-        let mut pairs: Vec<Pair<usize, usize>> = Vec::with_capacity(nu + 4 * model.springs.len());
+        let mut pairs: Vec<(usize, usize)> = Vec::with_capacity(nu + 4 * model.springs.len());
         let mut base = Vec::with_capacity(pairs.capacity());
         let mut pinned_rhs = vec![Vec3::zeros(); n];
         for (u, &i) in particle.iter().enumerate() {
             let i = i as usize;
-            pairs.push(Pair::new(u, u));
+            pairs.push((u, u));
             base.push(model.mass[i] * (1.0 / (h * h) + model.damping[i] / h));
         }
         // One linear element: weight w, nodes with coefficients (lower triangle only).
@@ -138,7 +134,7 @@ impl ProjectiveDynamics {
                     if ib == u32::MAX {
                         pinned_rhs[a] -= x[b].coords * (w * ca * cb);
                     } else if ib <= ia {
-                        pairs.push(Pair::new(ia as usize, ib as usize));
+                        pairs.push((ia as usize, ib as usize));
                         base.push(w * ca * cb);
                     }
                 }
@@ -157,20 +153,13 @@ impl ProjectiveDynamics {
                 .collect();
             element(&nodes, model.bend_c[e]);
         }
-        let (symbolic, argsort) =
-            SymbolicSparseColMat::try_new_from_indices(nu, nu, &pairs).expect("valid indices");
-        let llt_symbolic = (nu > 0).then(|| {
-            SymbolicLlt::try_new(symbolic.as_ref(), Side::Lower).expect("symbolic Cholesky")
-        });
+        let chol = (nu > 0).then(|| Cholesky::analyse(nu, &pairs));
         let mut pd = ProjectiveDynamics {
             settings: *settings,
             particle,
-            symbolic,
-            argsort,
-            llt_symbolic,
+            chol,
             values: base.clone(),
             base,
-            llt: None,
             factored: vec![0.0; n],
             weight: vec![0.0; n],
             target: vec![Point3::origin(); n],
@@ -179,7 +168,7 @@ impl ProjectiveDynamics {
             p: Vec::new(),
             prev: Vec::new(),
             prev2: Vec::new(),
-            rhs: Mat::zeros(nu, 3),
+            rhs: vec![[0.0; 3]; nu],
             contact: Vec::new(),
             anderson: super::anderson::Anderson::new(settings.anderson as usize),
             u: Vec::new(),
@@ -195,20 +184,15 @@ impl ProjectiveDynamics {
     /// Factors the matrix with the contact weights `weight` (numerically: the symbolic analysis
     /// is kept).
     fn factor(&mut self) {
-        let Some(symbolic) = &self.llt_symbolic else {
+        let Some(chol) = &mut self.chol else {
             return;
         };
         self.values.clone_from(&self.base);
         for (u, &i) in self.particle.iter().enumerate() {
             self.values[u] += self.weight[i as usize];
         }
-        let mat =
-            SparseColMat::new_from_argsort(self.symbolic.clone(), &self.argsort, &self.values)
-                .expect("the pattern's values");
-        self.llt = Some(
-            Llt::try_new_with_symbolic(symbolic.clone(), mat.as_ref(), Side::Lower)
-                .expect("the global matrix is positive definite: masses are positive"),
-        );
+        chol.factor(&self.values)
+            .expect("the global matrix is positive definite: masses are positive");
         self.factored.clone_from(&self.weight);
         self.stats.factorisations += 1;
     }
@@ -252,7 +236,7 @@ impl ProjectiveDynamics {
         let proj = |(d, s): (&mut Vec3, &crate::cloth::elements::Spring)| {
             *d = s.project(&p[s.a as usize], &p[s.b as usize], band)
         };
-        if par::parallel(model.springs.len()) {
+        if par::parallel_light(model.springs.len()) {
             self.d.par_iter_mut().zip(&model.springs).for_each(proj);
         } else {
             self.d.iter_mut().zip(&model.springs).for_each(proj);
@@ -264,41 +248,33 @@ impl ProjectiveDynamics {
         let StepIn {
             model, x, y, dt, ..
         } = *input;
-        let Some(llt) = &self.llt else { return };
+        let Some(chol) = &mut self.chol else { return };
         let d = &self.d;
-        let rows: Vec<Vec3> = self
-            .particle
-            .par_iter()
-            .map(|&i| {
-                let i = i as usize;
-                let m = model.mass[i];
-                let mut r = y[i].coords * (m / (dt * dt))
-                    + x[i].coords * (model.damping[i] * m / dt)
-                    + self.pinned_rhs[i]
-                    + self.target[i].coords * self.weight[i];
-                for &(_, s) in
-                    &model.adj[model.adj_start[i] as usize..model.adj_start[i + 1] as usize]
-                {
-                    let sp = &model.springs[s as usize];
-                    let sign = if sp.a as usize == i { -1.0 } else { 1.0 };
-                    r += d[s as usize] * (sp.k * sign);
-                }
-                r
-            })
-            .collect();
-        for (u, r) in rows.iter().enumerate() {
-            for c in 0..3 {
-                self.rhs[(u, c)] = r[c];
+        let (pinned_rhs, target, weight) = (&self.pinned_rhs, &self.target, &self.weight);
+        let row = |(out, &i): (&mut [f64; 3], &u32)| {
+            let i = i as usize;
+            let m = model.mass[i];
+            let mut r = y[i].coords * (m / (dt * dt))
+                + x[i].coords * (model.damping[i] * m / dt)
+                + pinned_rhs[i]
+                + target[i].coords * weight[i];
+            for &(_, s) in &model.adj[model.adj_start[i] as usize..model.adj_start[i + 1] as usize]
+            {
+                let sp = &model.springs[s as usize];
+                let sign = if sp.a as usize == i { -1.0 } else { 1.0 };
+                r += d[s as usize] * (sp.k * sign);
             }
+            *out = [r.x, r.y, r.z];
+        };
+        if par::parallel_light(self.particle.len()) {
+            self.rhs.par_iter_mut().zip(&self.particle).for_each(row);
+        } else {
+            self.rhs.iter_mut().zip(&self.particle).for_each(row);
         }
-        // x, y and z at once: the three columns are independent solves.
-        let (c0, rest) = self.rhs.as_mut().split_at_col_mut(1);
-        let (c1, c2) = rest.split_at_col_mut(1);
-        [c0, c1, c2]
-            .into_par_iter()
-            .for_each(|c| llt.solve_in_place(c));
-        for (u, &i) in self.particle.iter().enumerate() {
-            self.p[i as usize] = Point3::new(self.rhs[(u, 0)], self.rhs[(u, 1)], self.rhs[(u, 2)]);
+        // x, y and z at once: one sweep of the factor serves the three columns.
+        chol.solve(&mut self.rhs);
+        for (r, &i) in self.rhs.iter().zip(&self.particle) {
+            self.p[i as usize] = Point3::from(*r);
         }
     }
 }

@@ -1,0 +1,341 @@
+//! `drapekit garment PATTERN.json --body BODY.obj -o OUT_DIR`: sew a GarmentCode pattern on a
+//! body and let it hang, with no scene file.
+
+use crate::cloth::fabric::Fabric;
+use crate::garment::drape::{self as gd, GarmentSettings, StageReport};
+use crate::garment::measure::{self, Measures, Thresholds};
+use crate::io::{self, ReadOptions};
+use crate::mesh::prepare::{prepare, PrepareOptions};
+use crate::mesh::transform::{change_up, change_up_point, Units, Up};
+use crate::mesh::TriMesh;
+use crate::sim;
+use anyhow::{bail, Context};
+use clap::Args;
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+
+/// Arguments of `drapekit garment`.
+#[derive(Debug, Args)]
+pub struct GarmentArgs {
+    /// The sewing pattern (GarmentCode specification JSON).
+    pub pattern: PathBuf,
+    /// The body (a closed mesh in the pattern's frame: y up, feet at y = 0).
+    #[arg(long, value_name = "BODY")]
+    pub body: PathBuf,
+    /// The output directory: the garment (one OBJ, a group per panel) and the body as placed.
+    #[arg(short, long, value_name = "OUT_DIR")]
+    pub output: PathBuf,
+    /// Write the JSON report here.
+    #[arg(long, value_name = "R.json")]
+    pub report: Option<PathBuf>,
+    /// Print the JSON report instead of the summary.
+    #[arg(long)]
+    pub json: bool,
+    /// The fabric preset (see the README's table).
+    #[arg(long, default_value = "cotton")]
+    pub fabric: String,
+    /// Particle spacing, m.
+    #[arg(long, default_value_t = 0.01)]
+    pub spacing: f64,
+    /// Friction between the garment and the body.
+    #[arg(long, default_value_t = 0.5)]
+    pub friction: f64,
+    /// The body's units (`auto`: from its height, a standing person being 0.5 to 2.5 m tall).
+    #[arg(long, default_value = "auto")]
+    pub body_units: String,
+    /// Longest sewing stage, simulated s.
+    #[arg(long, default_value_t = 2.0)]
+    pub sew_max: f64,
+    /// Longest drape after sewing, simulated s.
+    #[arg(long, default_value_t = 8.0)]
+    pub settle_max: f64,
+}
+
+/// The report of `drapekit garment`.
+#[derive(Debug, Serialize)]
+pub struct GarmentReport {
+    /// The pattern file.
+    pub pattern: String,
+    /// The body file.
+    pub body: String,
+    /// What was assumed about units and frames.
+    pub assumed: Vec<String>,
+    /// The fabric preset.
+    pub fabric: String,
+    /// Particle spacing, m.
+    pub spacing: f64,
+    /// Particles, triangles, seam springs.
+    pub particles: usize,
+    /// Triangles.
+    pub triangles: usize,
+    /// Seam springs.
+    pub seam_springs: usize,
+    /// Stage 1.
+    pub sew: StageReport,
+    /// Stage 2.
+    pub drape: StageReport,
+    /// Fraction of particles moving more than 0.3 mm in the last 1/60 s.
+    pub moving_fraction: f64,
+    /// The whole garment's measures.
+    pub garment: Measures,
+    /// Per panel.
+    pub panels: Vec<Measures>,
+    /// The limits of the verdict.
+    pub thresholds: Thresholds,
+    /// `pass`, or `fail`.
+    pub verdict: String,
+    /// Why it failed.
+    pub failed: Vec<String>,
+    /// Files written.
+    pub files: Vec<String>,
+    /// Wall time of the whole command, s.
+    pub wall_seconds: f64,
+}
+
+/// The body read, prepared, in metres (units from `spec`, or guessed from its height) and
+/// z up. Returns it and what was assumed.
+fn read_body(path: &Path, spec: &str) -> anyhow::Result<(TriMesh, String)> {
+    let read = io::read_mesh(path, &ReadOptions::default())?;
+    let mut mesh = read.mesh;
+    prepare(&mut mesh, &PrepareOptions::default());
+    let Some(b) = mesh.bbox() else {
+        bail!("{}: the body has no vertices", path.display());
+    };
+    let height = b.size().y;
+    let (units, how) = if spec == "auto" {
+        let u = [Units::M, Units::Cm, Units::Mm]
+            .into_iter()
+            .find(|u| (0.5..=2.5).contains(&(height * u.metres())))
+            .with_context(|| {
+                format!(
+                    "{}: the body is {height:.4} units tall along y, a person in no unit \
+                     drapekit knows (m, cm, mm): give --body-units, and check that y is up",
+                    path.display()
+                )
+            })?;
+        (u, "guessed from its height")
+    } else {
+        let u: Units = spec
+            .parse()
+            .map_err(|e| anyhow::anyhow!("--body-units {spec}: {e}"))?;
+        (u, "given")
+    };
+    let f = units.metres();
+    for p in &mut mesh.positions {
+        *p = crate::math::Point3::from(p.coords * f);
+    }
+    change_up(&mut mesh, Up::Y, Up::Z);
+    let note = format!(
+        "the body is in {units:?} ({how}: {:.3} m tall), y up, in the pattern's frame",
+        height * f
+    )
+    .to_lowercase();
+    Ok((mesh, note))
+}
+
+/// Checks the flags and builds the settings.
+fn settings(args: &GarmentArgs) -> anyhow::Result<GarmentSettings> {
+    let fabric = Fabric::preset(&args.fabric).with_context(|| {
+        let names: Vec<&str> = Fabric::presets().iter().map(|(n, _)| *n).collect();
+        format!(
+            "--fabric {}: not a preset (one of {})",
+            args.fabric,
+            names.join(", ")
+        )
+    })?;
+    let positive = |v: f64, flag: &str| -> anyhow::Result<()> {
+        if !(v.is_finite() && v > 0.0) {
+            bail!("{flag} {v}: must be a positive number");
+        }
+        Ok(())
+    };
+    positive(args.spacing, "--spacing")?;
+    positive(args.sew_max, "--sew-max")?;
+    positive(args.settle_max, "--settle-max")?;
+    if !(args.friction.is_finite() && args.friction >= 0.0) {
+        bail!("--friction {}: must be 0 or more", args.friction);
+    }
+    if args.spacing < 0.002 || args.spacing > 0.1 {
+        bail!("--spacing {} m: use 0.002 to 0.1 m", args.spacing);
+    }
+    let mut s = GarmentSettings::default();
+    s.assemble.spacing = args.spacing;
+    s.assemble.fabric = fabric;
+    s.friction = args.friction;
+    s.sew_max = args.sew_max;
+    s.settle_max = args.settle_max;
+    Ok(s)
+}
+
+/// The garment as one mesh in the pattern's frame (y up, m), and its panels' face ranges.
+fn garment_mesh(world: &sim::World) -> (TriMesh, Vec<(String, usize, usize)>) {
+    let positions = world
+        .state
+        .x
+        .iter()
+        .map(|p| change_up_point(*p, Up::Z, Up::Y))
+        .collect();
+    let m = &world.model;
+    let groups = m
+        .pieces
+        .iter()
+        .map(|p| (p.name.clone(), p.first_triangle, p.triangles))
+        .collect();
+    (TriMesh::new(positions, m.triangles.clone()), groups)
+}
+
+/// Writes an OBJ with a group per panel.
+fn write_groups(
+    path: &Path,
+    mesh: &TriMesh,
+    groups: &[(String, usize, usize)],
+    inputs: &[&Path],
+) -> anyhow::Result<()> {
+    io::write_atomic(path, inputs, |w| {
+        use std::io::Write;
+        writeln!(w, "# drapekit garment: {} panels", groups.len())?;
+        for p in &mesh.positions {
+            writeln!(w, "v {:?} {:?} {:?}", p.x, p.y, p.z)?;
+        }
+        for (name, first, count) in groups {
+            writeln!(w, "g {name}")?;
+            for f in &mesh.faces[*first..first + count] {
+                writeln!(w, "f {} {} {}", f[0] + 1, f[1] + 1, f[2] + 1)?;
+            }
+        }
+        Ok(())
+    })?;
+    Ok(())
+}
+
+/// Runs `drapekit garment`.
+pub fn run(args: GarmentArgs) -> anyhow::Result<()> {
+    let start = std::time::Instant::now();
+    let settings = settings(&args)?;
+    let pattern = crate::garment::read(&args.pattern)?;
+    let (body, body_note) = read_body(&args.body, &args.body_units)?;
+    if args.output.is_file() {
+        bail!(
+            "{} is a file: the output must be a directory",
+            args.output.display()
+        );
+    }
+    let progress = |t: f64| {
+        if super::interactive() {
+            eprint!("\rsewing: {t:.2} s simulated");
+        }
+    };
+    let mut g = gd::sew_and_drape(&pattern, body, &settings, &progress)?;
+    if super::interactive() {
+        eprintln!();
+    }
+    let moving = gd::moving_fraction(&mut g.world, &settings.solver)?;
+    let c = &g.world.colliders[0];
+    let inside: Vec<bool> = if c.closed {
+        g.world.state.x.iter().map(|p| sim::inside(c, p)).collect()
+    } else {
+        vec![false; g.world.model.len()]
+    };
+    let mut panels = measure::measures(&g.world, &g.seams, &inside);
+    let whole = panels.pop().expect("the whole garment");
+    let thresholds = Thresholds::default();
+    let failed = measure::verdict(&whole, moving, &thresholds);
+    std::fs::create_dir_all(&args.output)
+        .with_context(|| format!("cannot create {}", args.output.display()))?;
+    let inputs = [args.pattern.as_path(), args.body.as_path()];
+    let stem = |p: &Path| p.file_stem().map(|s| s.to_string_lossy().into_owned());
+    let name = stem(&args.pattern).unwrap_or_else(|| "garment".into());
+    let name = name
+        .strip_suffix("_specification")
+        .unwrap_or(&name)
+        .to_string();
+    let (mesh, groups) = garment_mesh(&g.world);
+    let garment_path = args.output.join(format!("{name}.obj"));
+    write_groups(&garment_path, &mesh, &groups, &inputs)?;
+    let mut body_mesh = c.mesh.clone();
+    change_up(&mut body_mesh, Up::Z, Up::Y);
+    let body_path = args.output.join(format!(
+        "{}.obj",
+        stem(&args.body).unwrap_or_else(|| "body".into())
+    ));
+    io::write_mesh(
+        &body_path,
+        &body_mesh,
+        &io::WriteOptions::default(),
+        &inputs,
+    )?;
+    let mut assumed = vec![body_note];
+    assumed.push(format!(
+        "the pattern is in units of 1/{} m (its units_in_meter)",
+        pattern.units_in_meter
+    ));
+    let report = GarmentReport {
+        pattern: args.pattern.display().to_string(),
+        body: args.body.display().to_string(),
+        assumed,
+        fabric: args.fabric.clone(),
+        spacing: args.spacing,
+        particles: g.world.model.len(),
+        triangles: g.world.model.triangles.len(),
+        seam_springs: g.seams.len(),
+        sew: g.sew,
+        drape: g.drape,
+        moving_fraction: moving,
+        garment: whole,
+        panels,
+        thresholds,
+        verdict: if failed.is_empty() { "pass" } else { "fail" }.into(),
+        failed,
+        files: vec![
+            garment_path.display().to_string(),
+            body_path.display().to_string(),
+        ],
+        wall_seconds: start.elapsed().as_secs_f64(),
+    };
+    super::finish(
+        &report,
+        args.report.as_deref(),
+        &inputs,
+        &args.output,
+        args.json,
+        print_summary,
+    )
+}
+
+fn print_summary(r: &GarmentReport) {
+    println!(
+        "{}: {} particles, {} seam springs, {} on {}",
+        r.pattern, r.particles, r.seam_springs, r.fabric, r.body
+    );
+    for a in &r.assumed {
+        println!("  assumed: {a}");
+    }
+    println!(
+        "  sewing: {:.2} s simulated ({}), largest seam gap {:.2} mm",
+        r.sew.time,
+        if r.sew.done { "closed" } else { "NOT closed" },
+        r.sew.seam_gap_max * 1e3
+    );
+    println!(
+        "  drape: {:.2} s simulated ({}), {:.1}% still moving",
+        r.drape.time,
+        if r.drape.done {
+            "at rest"
+        } else {
+            "NOT at rest"
+        },
+        r.moving_fraction * 100.0
+    );
+    let w = &r.garment;
+    println!(
+        "  seams: largest gap {:.2} mm, mean {:.2} mm; inside the body: {}; strain {:.2}%",
+        w.seam_gap_max_mm,
+        w.seam_gap_mean_mm,
+        w.particles_inside,
+        w.max_strain * 100.0
+    );
+    println!("  verdict: {} in {:.1} s", r.verdict, r.wall_seconds);
+    for f in &r.failed {
+        println!("    failed: {f}");
+    }
+}

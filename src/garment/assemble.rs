@@ -1,0 +1,263 @@
+//! A pattern made cloth. Each panel's outline, sampled with the stitched edges paired
+//! ([`super::sample`]), becomes a piece: the paper's warp/weft grid inside, the band to the
+//! outline triangulated (`cloth::pattern::build`), the outline samples kept as its boundary
+//! particles. The panel's placement `R (x, y, 0) + t` puts it in 3D; the pattern's units become
+//! metres (`units_in_meter`) and its y-up frame drapekit's z-up one.
+//!
+//! Each stitch's sample pairs become **seam springs** (`SpringKind::Seam`) of rest length 0
+//! between the two sides' particles: `k_s / 2 |x_a - x_b|^2`, quadratic, so projective dynamics
+//! keeps them in its prefactored matrix and needs no projection for them. `k_s` is
+//! [`SEAM_STIFFNESS`] times the fabric's stretch constant: stiff enough to hold the two sides
+//! together like the thread does, a closed seam acting as one particle (the reference
+//! pipeline merges the pairs outright), while the sides still start apart and are pulled
+//! together during sewing. Pairs that land on one particle (the corner shared by two stitches
+//! of one panel, a dart's tip) get no spring.
+//!
+//! A seam **carries bending across itself**: each pair gets the over-one-node element of the
+//! grid (`cloth::pattern`), `(B / h^2) |x_a' - x_a - x_b + x_b'|^2 / 2` with `x_a'` and `x_b'`
+//! the particles one step inside either panel (the sample's spring neighbour nearest the
+//! outline's inward normal). Closed and flat (`x_a = x_b` midway between the two), it vanishes;
+//! folded at the seam, it costs what the fabric's bending rigidity `B` says. Without it a seam
+//! is a free hinge (outline particles get no bending), and a sewn tube stays a flat lens.
+
+use super::sample::{edge_segments, sample_all, stitch_pairs};
+use super::spec::Pattern;
+use crate::cloth::elements::{Bend, Spring, SpringKind};
+use crate::cloth::fabric::Fabric;
+use crate::cloth::pattern::{self, PatternError, Piece, Pins};
+use crate::math::{Point2, Point3, Vec2};
+use crate::mesh::transform::{change_up_point, Up};
+use std::collections::HashMap;
+
+/// Seam springs' constant relative to the fabric's stretch constant (warp and weft's larger).
+pub const SEAM_STIFFNESS: f64 = 10.0;
+
+/// How a pattern is made cloth.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AssembleOptions {
+    /// Particle spacing, m (default 0.01: the reference pipeline's 1 cm).
+    pub spacing: f64,
+    /// The fabric of every panel (default cotton).
+    pub fabric: Fabric,
+}
+
+impl Default for AssembleOptions {
+    fn default() -> Self {
+        AssembleOptions {
+            spacing: 0.01,
+            fabric: Fabric::cotton(),
+        }
+    }
+}
+
+/// One seam spring's ends (model particles) and the stitch it sews (0-based).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SeamPair {
+    /// Particle on the stitch's first edge.
+    pub a: u32,
+    /// Particle on the stitch's second edge.
+    pub b: u32,
+    /// The stitch.
+    pub stitch: usize,
+}
+
+/// A pattern as pieces ready for `ClothModel::assemble` (name, piece, fabric, placed
+/// particles, in metres, z up) and its seams.
+#[derive(Debug, Clone)]
+pub struct Assembled {
+    /// The panels' pieces, in the pattern's order.
+    pub pieces: Vec<(String, Piece, Fabric, Vec<Point3>)>,
+    /// Seam springs' ends (indices into the assembled model's particles).
+    pub seams: Vec<SeamPair>,
+    /// The seam springs' constant, N/m.
+    pub seam_k: f64,
+    /// Bending elements across the seams.
+    pub seam_bends: Vec<Bend>,
+}
+
+/// What stops a pattern from becoming cloth.
+#[derive(Debug, thiserror::Error)]
+pub enum AssembleError {
+    /// A panel's sampled outline is not a piece.
+    #[error("panel '{panel}': {error}")]
+    Panel { panel: String, error: PatternError },
+    /// The spacing is not a positive length.
+    #[error("spacing {spacing} m must be a positive number")]
+    Spacing { spacing: f64 },
+}
+
+/// The pattern's units per metre, its y-up frame, and a panel's placement, as one map from
+/// panel coordinates (metres) to drapekit's frame.
+fn placer(pattern: &Pattern, panel: usize) -> impl Fn(&Point2) -> Point3 + '_ {
+    let p = &pattern.panels[panel];
+    let (r, t) = (p.rotation(), p.translation / pattern.units_in_meter);
+    move |q: &Point2| change_up_point(r * Point3::new(q.x, q.y, 0.0) + t, Up::Y, Up::Z)
+}
+
+/// Makes cloth of `pattern`: every panel a piece, every stitch seam springs. Every panel's
+/// problem is reported together.
+pub fn assemble(
+    pattern: &Pattern,
+    opts: &AssembleOptions,
+) -> Result<Assembled, Vec<AssembleError>> {
+    let h = opts.spacing;
+    if !(h.is_finite() && h > 0.0) {
+        return Err(vec![AssembleError::Spacing { spacing: h }]);
+    }
+    let to_m = 1.0 / pattern.units_in_meter;
+    let counts = edge_segments(pattern, h / to_m);
+    let sampled = sample_all(pattern, &counts);
+    let (mut pieces, mut errors, mut outline_particle) = (Vec::new(), Vec::new(), Vec::new());
+    let mut first = 0u32;
+    for (k, (panel, s)) in pattern.panels.iter().zip(&sampled).enumerate() {
+        let outline: Vec<Point2> = s
+            .points
+            .iter()
+            .map(|q| Point2::from(q.coords * to_m))
+            .collect();
+        match pattern::build(&outline, h, &opts.fabric, &Pins::default()) {
+            Ok(piece) => {
+                outline_particle.push(sample_particles(&piece, &outline, first));
+                first += piece.flat.len() as u32;
+                let place = placer(pattern, k);
+                let placed = piece.flat.iter().map(&place).collect();
+                pieces.push((panel.name.clone(), piece, opts.fabric.clone(), placed));
+            }
+            Err(error) => errors.push(AssembleError::Panel {
+                panel: panel.name.clone(),
+                error,
+            }),
+        }
+    }
+    if !errors.is_empty() {
+        return Err(errors);
+    }
+    let mut seams = Vec::new();
+    let mut seam_bends = Vec::new();
+    let bend = 0.5 * (opts.fabric.bend[0] + opts.fabric.bend[1]) / (h * h);
+    for (i, st) in pattern.stitches.iter().enumerate() {
+        for (sa, sb) in stitch_pairs(&sampled, st) {
+            let a = outline_particle[st.a.panel][sa];
+            let b = outline_particle[st.b.panel][sb];
+            if a == b {
+                continue;
+            }
+            seams.push(SeamPair { a, b, stitch: i });
+            let ia = inner_neighbour(&pieces[st.a.panel].1, st.a.panel, sa, &sampled, to_m);
+            let ib = inner_neighbour(&pieces[st.b.panel].1, st.b.panel, sb, &sampled, to_m);
+            if let (Some(ia), Some(ib), true) = (ia, ib, bend > 0.0) {
+                let (fa, fb) = (first_of(&pieces, st.a.panel), first_of(&pieces, st.b.panel));
+                seam_bends.push(Bend {
+                    nodes: vec![a, b, fa + ia, fb + ib],
+                    weights: vec![-1.0, -1.0, 1.0, 1.0],
+                    c: bend,
+                });
+            }
+        }
+    }
+    let seam_k = SEAM_STIFFNESS * opts.fabric.stretch[0].max(opts.fabric.stretch[1]);
+    Ok(Assembled {
+        pieces,
+        seams,
+        seam_k,
+        seam_bends,
+    })
+}
+
+/// The first model particle of panel `k`.
+fn first_of(pieces: &[(String, Piece, Fabric, Vec<Point3>)], k: usize) -> u32 {
+    pieces[..k].iter().map(|p| p.1.flat.len() as u32).sum()
+}
+
+/// The particle of `piece` one step inside the outline from sample `s` of panel `k`: the
+/// spring neighbour of the sample's particle most nearly along the outline's inward normal
+/// there (within 45 degrees), as a piece index.
+fn inner_neighbour(
+    piece: &Piece,
+    k: usize,
+    s: usize,
+    sampled: &[super::sample::SampledPanel],
+    to_m: f64,
+) -> Option<u32> {
+    let pts = &sampled[k].points;
+    let n = pts.len();
+    let (prev, next) = (pts[(s + n - 1) % n], pts[(s + 1) % n]);
+    let t = (next - prev) * to_m;
+    let area: f64 = (0..n)
+        .map(|i| pts[i].coords.perp(&pts[(i + 1) % n].coords))
+        .sum();
+    // Inside is to the left of the direction of travel of a counter-clockwise outline.
+    let inward = if area > 0.0 {
+        Vec2::new(-t.y, t.x)
+    } else {
+        Vec2::new(t.y, -t.x)
+    };
+    let inward = inward.try_normalize(0.0)?;
+    let here = Point2::from(pts[s].coords * to_m);
+    let me = piece.flat.iter().position(|q| *q == here)? as u32;
+    piece
+        .springs
+        .iter()
+        .filter_map(|sp| match (sp.a == me, sp.b == me) {
+            (true, _) => Some(sp.b),
+            (_, true) => Some(sp.a),
+            _ => None,
+        })
+        .map(|o| {
+            let d = (piece.flat[o as usize] - here).normalize();
+            (o, d.dot(&inward))
+        })
+        .filter(|&(_, c)| c > std::f64::consts::FRAC_1_SQRT_2)
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(o, _)| o)
+}
+
+/// The model particle (piece particles numbered from `first`) of each outline sample. `build`
+/// keeps every sample as an outline particle at exactly its position (it only adds points on
+/// segments longer than the spacing).
+fn sample_particles(piece: &Piece, outline: &[Point2], first: u32) -> Vec<u32> {
+    let key = |q: &Point2| (q.x.to_bits(), q.y.to_bits());
+    let at: HashMap<(u64, u64), u32> = piece
+        .flat
+        .iter()
+        .enumerate()
+        .skip(piece.grid_particles)
+        .map(|(i, q)| (key(q), i as u32))
+        .collect();
+    outline
+        .iter()
+        .map(|q| {
+            first
+                + *at
+                    .get(&key(q))
+                    .expect("every sample is an outline particle")
+        })
+        .collect()
+}
+
+/// The seam springs of `assembled` (to append to the model's springs).
+pub fn seam_springs(assembled: &Assembled) -> Vec<Spring> {
+    assembled
+        .seams
+        .iter()
+        .map(|s| Spring {
+            a: s.a,
+            b: s.b,
+            rest: 0.0,
+            k: assembled.seam_k,
+            kind: SpringKind::Seam,
+        })
+        .collect()
+}
+
+/// The largest and mean seam gap at `x`, m (0 without seams).
+pub fn seam_gaps(seams: &[SeamPair], x: &[Point3]) -> (f64, f64) {
+    if seams.is_empty() {
+        return (0.0, 0.0);
+    }
+    let gaps = seams
+        .iter()
+        .map(|s| (x[s.a as usize] - x[s.b as usize]).norm());
+    let (max, sum) = gaps.fold((0.0f64, 0.0), |(m, t), g| (m.max(g), t + g));
+    (max, sum / seams.len() as f64)
+}

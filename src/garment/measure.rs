@@ -1,0 +1,135 @@
+//! What a garment run reports, per panel and for the whole garment: seam gaps, particles inside
+//! the body, strain of the stretch springs, and the verdict against [`Thresholds`].
+
+use super::assemble::SeamPair;
+use crate::cloth::elements::SpringKind;
+use crate::sim::World;
+use serde::Serialize;
+
+/// The limits a draped garment is judged by.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Thresholds {
+    /// Largest seam gap, mm (default 1).
+    pub seam_gap_max_mm: f64,
+    /// Particles inside the body (default 0).
+    pub particles_inside: usize,
+    /// Largest strain of a stretch spring (default 0.05).
+    pub max_strain: f64,
+    /// Fraction of particles still moving (default 0.015, the reference pipeline's).
+    pub moving_fraction: f64,
+}
+
+impl Default for Thresholds {
+    fn default() -> Self {
+        Thresholds {
+            seam_gap_max_mm: 1.0,
+            particles_inside: 0,
+            max_strain: 0.05,
+            moving_fraction: 0.015,
+        }
+    }
+}
+
+/// Measures of a panel or of the whole garment.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct Measures {
+    /// Panel name (`garment` for the whole).
+    pub name: String,
+    /// Particles.
+    pub particles: usize,
+    /// Largest gap of the seams touching it, mm.
+    pub seam_gap_max_mm: f64,
+    /// Mean gap of the seams touching it, mm.
+    pub seam_gap_mean_mm: f64,
+    /// Particles inside the body.
+    pub particles_inside: usize,
+    /// Largest strain of its stretch springs.
+    pub max_strain: f64,
+}
+
+/// Per panel, then the whole garment (last). `inside[i]`: particle `i` is inside the body.
+pub fn measures(world: &World, seams: &[SeamPair], inside: &[bool]) -> Vec<Measures> {
+    let m = &world.model;
+    let x = &world.state.x;
+    let mut out: Vec<Measures> = m
+        .pieces
+        .iter()
+        .map(|p| Measures {
+            name: p.name.clone(),
+            particles: p.count,
+            ..Measures::default()
+        })
+        .collect();
+    out.push(Measures {
+        name: "garment".into(),
+        particles: m.len(),
+        ..Measures::default()
+    });
+    let panel_of = |i: u32| {
+        m.pieces
+            .iter()
+            .position(|p| (i as usize) >= p.first && (i as usize) < p.first + p.count)
+            .expect("every particle is in a piece")
+    };
+    let whole = out.len() - 1;
+    let mut gap_sum = vec![0.0; out.len()];
+    let mut gap_count = vec![0usize; out.len()];
+    for s in seams {
+        let g = (x[s.a as usize] - x[s.b as usize]).norm() * 1e3;
+        let mut panels = vec![panel_of(s.a), panel_of(s.b), whole];
+        panels.dedup();
+        for k in panels {
+            out[k].seam_gap_max_mm = out[k].seam_gap_max_mm.max(g);
+            gap_sum[k] += g;
+            gap_count[k] += 1;
+        }
+    }
+    for (k, o) in out.iter_mut().enumerate() {
+        o.seam_gap_mean_mm = gap_sum[k] / gap_count[k].max(1) as f64;
+    }
+    for (i, &inn) in inside.iter().enumerate() {
+        if inn {
+            out[panel_of(i as u32)].particles_inside += 1;
+            out[whole].particles_inside += 1;
+        }
+    }
+    for s in m.springs.iter().filter(|s| s.kind == SpringKind::Stretch) {
+        let e = (x[s.b as usize] - x[s.a as usize]).norm() / s.rest - 1.0;
+        let k = panel_of(s.a);
+        out[k].max_strain = out[k].max_strain.max(e);
+        out[whole].max_strain = out[whole].max_strain.max(e);
+    }
+    out
+}
+
+/// The verdict: every failed limit, named (empty: passes).
+pub fn verdict(whole: &Measures, moving_fraction: f64, t: &Thresholds) -> Vec<String> {
+    let mut failed = Vec::new();
+    if whole.seam_gap_max_mm > t.seam_gap_max_mm {
+        failed.push(format!(
+            "a seam gap of {:.2} mm (at most {} mm)",
+            whole.seam_gap_max_mm, t.seam_gap_max_mm
+        ));
+    }
+    if whole.particles_inside > t.particles_inside {
+        failed.push(format!(
+            "{} particles inside the body (at most {})",
+            whole.particles_inside, t.particles_inside
+        ));
+    }
+    if whole.max_strain > t.max_strain {
+        failed.push(format!(
+            "strain {:.2}% (at most {}%)",
+            whole.max_strain * 100.0,
+            t.max_strain * 100.0
+        ));
+    }
+    if moving_fraction > t.moving_fraction {
+        failed.push(format!(
+            "{:.1}% of the particles still moving (at most {}%)",
+            moving_fraction * 100.0,
+            t.moving_fraction * 100.0
+        ));
+    }
+    failed
+}

@@ -1,0 +1,120 @@
+//! Garments: a pattern assembled, sewn around a body, and reported on.
+
+mod common;
+
+use drapekit::garment::assemble::{assemble, AssembleOptions};
+use drapekit::garment::drape::{garment_world, sew, GarmentSettings};
+use drapekit::garment::parse;
+use drapekit::math::{Point3, Vec3};
+use drapekit::mesh::TriMesh;
+use std::path::Path;
+
+/// Two 60 x 40 cm panels (cm, y up), one 30 cm in front of the y axis, the other 30 cm behind
+/// it and turned to face back, sewn along both sides: a tube of perimeter 120 cm.
+const TUBE: &str = r#"{"pattern": {"panels": {
+  "front": {"vertices": [[-30, 0], [30, 0], [30, 40], [-30, 40]],
+            "edges": [{"endpoints": [0, 1]}, {"endpoints": [1, 2]}, {"endpoints": [2, 3]}, {"endpoints": [3, 0]}],
+            "translation": [0, 80, 30], "rotation": [0, 0, 0]},
+  "back":  {"vertices": [[-30, 0], [30, 0], [30, 40], [-30, 40]],
+            "edges": [{"endpoints": [0, 1]}, {"endpoints": [1, 2]}, {"endpoints": [2, 3]}, {"endpoints": [3, 0]}],
+            "translation": [0, 80, -30], "rotation": [0, 180, 0]}},
+  "stitches": [[{"panel": "front", "edge": 1}, {"panel": "back", "edge": 3}],
+               [{"panel": "front", "edge": 3}, {"panel": "back", "edge": 1}]]},
+  "parameters": {}, "parameter_order": [],
+  "properties": {"curvature_coords": "relative", "units_in_meter": 100}}"#;
+
+/// A closed cylinder about the z axis (drapekit's frame) of radius `r` from z0 to z1.
+fn cylinder(r: f64, z0: f64, z1: f64, n: usize) -> TriMesh {
+    let mut p = Vec::new();
+    for &z in &[z0, z1] {
+        for k in 0..n {
+            let a = std::f64::consts::TAU * k as f64 / n as f64;
+            p.push(Point3::new(r * a.cos(), r * a.sin(), z));
+        }
+    }
+    p.push(Point3::new(0.0, 0.0, z0));
+    p.push(Point3::new(0.0, 0.0, z1));
+    let (c0, c1) = (2 * n as u32, 2 * n as u32 + 1);
+    let mut f = Vec::new();
+    for k in 0..n as u32 {
+        let j = (k + 1) % n as u32;
+        let n = n as u32;
+        f.push([k, j, n + j]);
+        f.push([k, n + j, n + k]);
+        f.push([c0, j, k]);
+        f.push([c1, n + k, n + j]);
+    }
+    TriMesh::new(p, f)
+}
+
+#[test]
+fn stitched_samples_become_seam_springs_between_the_placed_sides() {
+    let pattern = parse(TUBE, Path::new("tube.json")).unwrap();
+    let opts = AssembleOptions {
+        spacing: 0.02,
+        ..AssembleOptions::default()
+    };
+    let a = assemble(&pattern, &opts).unwrap();
+    // 40 cm sides at 2 cm: 21 samples each, two stitches.
+    assert_eq!(a.seams.len(), 42);
+    // Every pair bends across its seam but the four at the corners (no neighbour lies along
+    // a corner's inward bisector).
+    assert_eq!(a.seam_bends.len(), 38);
+    let x: Vec<Point3> = a.pieces.iter().flat_map(|p| p.3.clone()).collect();
+    for s in &a.seams {
+        let (pa, pb) = (x[s.a as usize], x[s.b as usize]);
+        // Drapekit's frame: the pattern's y (height) is z, its z (front) is -y.
+        assert!((pa.z - pb.z).abs() < 1e-12, "same height: {pa} {pb}");
+        assert!((pa.x.abs() - 0.3).abs() < 1e-12 && (pa.x - pb.x).abs() < 1e-12);
+        assert!(
+            (pa.y + 0.3).abs() < 1e-12 && (pb.y - 0.3).abs() < 1e-12,
+            "{pa} {pb}"
+        );
+        assert!(pa.z >= 0.8 - 1e-12 && pa.z <= 1.2 + 1e-12);
+    }
+}
+
+#[test]
+fn a_tube_sewn_round_a_cylinder_closes_and_is_round() {
+    let pattern = parse(TUBE, Path::new("tube.json")).unwrap();
+    let mut settings = GarmentSettings::default();
+    settings.assemble.spacing = 0.02;
+    // A snug fit: the tube's round radius is 1.2 m / 2 pi = 0.191 m.
+    let r_body = 0.189;
+    let body = cylinder(r_body, 0.5, 1.5, 48);
+    let (mut world, seams, seam_k) = garment_world(&pattern, body, &settings).unwrap();
+    let report = sew(&mut world, &seams, &settings, &|_| {}).unwrap();
+    assert!(report.done, "seams closed: {report:?}");
+    assert!(report.seam_gap_max <= 1e-3);
+    drapekit::garment::drape::set_seam_k(&mut world.model, seam_k);
+    let steps = (0.5 / settings.solver.dt) as u64;
+    drapekit::sim::run_quiet(
+        &mut world,
+        &settings.solver,
+        drapekit::sim::Stop::Steps(steps),
+    )
+    .unwrap();
+    // Round: the mid-height ring hugs the cylinder, between its radius and the tube's.
+    let x = &world.state.x;
+    let ring: Vec<f64> = x
+        .iter()
+        .filter(|p| (p.z - 1.0).abs() < 0.011)
+        .map(|p| Vec3::new(p.x, p.y, 0.0).norm())
+        .collect();
+    assert!(ring.len() > 20);
+    let min = ring.iter().copied().fold(f64::INFINITY, f64::min);
+    let max = ring.iter().copied().fold(0.0, f64::max);
+    let thickness = settings.assemble.fabric.thickness;
+    // The 48-gon's faces are r cos(pi / 48) from the axis at their middles.
+    let face = r_body * (std::f64::consts::PI / 48.0).cos();
+    assert!(min >= face + 0.5 * thickness, "outside the cylinder: {min}");
+    // The 1.25 cm of slack (1.2 m less the cylinder's 1.188 m) gathers in low tents at the
+    // two seams, a tent of width 2a holding slack e rising sqrt(a e): about 1 cm.
+    assert!(max < r_body + 0.015, "round: {min} to {max}");
+    let hugging = ring.iter().filter(|&&d| d < r_body + 0.003).count();
+    assert!(
+        hugging * 10 >= ring.len() * 8,
+        "{hugging} of {} within 3 mm of the cylinder",
+        ring.len()
+    );
+}
