@@ -64,7 +64,9 @@ pub struct GarmentReport {
     pub fabric: String,
     /// Particle spacing, m.
     pub spacing: f64,
-    /// Particles, triangles, seam springs.
+    /// Whether the body is closed (inside tests, and moving seams out of it, need it).
+    pub body_closed: bool,
+    /// Particles.
     pub particles: usize,
     /// Triangles.
     pub triangles: usize,
@@ -80,6 +82,8 @@ pub struct GarmentReport {
     pub garment: Measures,
     /// Per panel.
     pub panels: Vec<Measures>,
+    /// The stitches whose seams are not closed (gap above the verdict's limit), widest first.
+    pub open_seams: Vec<measure::OpenSeam>,
     /// The limits of the verdict.
     pub thresholds: Thresholds,
     /// `pass`, or `fail`.
@@ -275,6 +279,7 @@ pub fn run(args: GarmentArgs) -> anyhow::Result<()> {
         assumed,
         fabric: args.fabric.clone(),
         spacing: args.spacing,
+        body_closed: c.closed,
         particles: g.world.model.len(),
         triangles: g.world.model.triangles.len(),
         seam_springs: g.seams.len(),
@@ -283,6 +288,12 @@ pub fn run(args: GarmentArgs) -> anyhow::Result<()> {
         moving_fraction: moving,
         garment: whole,
         panels,
+        open_seams: measure::open_seams(
+            &pattern,
+            &g.seams,
+            &g.world.state.x,
+            thresholds.seam_gap_max_mm,
+        ),
         thresholds,
         verdict: if failed.is_empty() { "pass" } else { "fail" }.into(),
         failed,
@@ -337,5 +348,11 @@ fn print_summary(r: &GarmentReport) {
     println!("  verdict: {} in {:.1} s", r.verdict, r.wall_seconds);
     for f in &r.failed {
         println!("    failed: {f}");
+    }
+    for o in r.open_seams.iter().take(5) {
+        println!(
+            "    open seam: stitch {} ({} to {}), gap {:.1} mm",
+            o.stitch, o.edges[0], o.edges[1], o.gap_max_mm
+        );
     }
 }

@@ -4,5 +4,6 @@
 pub mod collider;
 pub mod contact;
 pub mod grid;
+pub mod inside;
 
 pub use collider::Collider;

@@ -133,3 +133,41 @@ pub fn verdict(whole: &Measures, moving_fraction: f64, t: &Thresholds) -> Vec<St
     }
     failed
 }
+
+/// A stitch whose seam is not closed.
+#[derive(Debug, Clone, Serialize)]
+pub struct OpenSeam {
+    /// The stitch (1-based, in the file's order).
+    pub stitch: usize,
+    /// Its two edges, `panel:edge` (edges 0-based, as in the file).
+    pub edges: [String; 2],
+    /// Its largest gap, mm.
+    pub gap_max_mm: f64,
+}
+
+/// The stitches with a gap above `limit_mm`, widest first.
+pub fn open_seams(
+    pattern: &super::Pattern,
+    seams: &[SeamPair],
+    x: &[crate::math::Point3],
+    limit_mm: f64,
+) -> Vec<OpenSeam> {
+    let mut widest = vec![0.0f64; pattern.stitches.len()];
+    for s in seams {
+        let g = (x[s.a as usize] - x[s.b as usize]).norm() * 1e3;
+        widest[s.stitch] = widest[s.stitch].max(g);
+    }
+    let name = |e: &super::EdgeRef| format!("{}:{}", pattern.panels[e.panel].name, e.edge);
+    let mut open: Vec<OpenSeam> = widest
+        .iter()
+        .enumerate()
+        .filter(|(_, &g)| g > limit_mm)
+        .map(|(i, &g)| OpenSeam {
+            stitch: i + 1,
+            edges: [name(&pattern.stitches[i].a), name(&pattern.stitches[i].b)],
+            gap_max_mm: g,
+        })
+        .collect();
+    open.sort_by(|a, b| b.gap_max_mm.total_cmp(&a.gap_max_mm));
+    open
+}

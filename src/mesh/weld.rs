@@ -11,7 +11,30 @@
 //! one it maps to it, otherwise it becomes a representative itself. Representatives keep their
 //! own positions (no averaging), so the result depends only on the input order, and a point
 //! never moves by more than the tolerance.
+//!
+//! **Closed stays closed.** Welding is for cracks: corners that should be shared but were
+//! written apart, which shows as edges with only one face. A vertex whose every edge already
+//! has exactly two faces is *sealed*: its faces close into a fan, as everywhere on a closed
+//! 2-manifold. Another face brought onto a sealed vertex always breaks the surface there (a
+//! third face on an edge, or a second fan: a pinch), unless that face shares the vertex and
+//! collapses. So [`weld`] lets a vertex `b` join a representative `a` (with the vertices already
+//! merged into it) only when
+//!
+//! * neither `b` nor any vertex of `a` is sealed (the cracks of a soup or of a split-vertex
+//!   export: the usual welding), or
+//! * `b` shares an edge with a vertex of `a`: the weld collapses edges shorter than the
+//!   tolerance, as it always did (a pole written as a ring of coincident vertices, a sliver
+//!   edge); their faces become degenerate and `clean` drops them.
+//!
+//! Otherwise `b` looks on for another representative, or becomes one. Two sheets of a closed
+//! surface that touch within the tolerance (the lips of a body mesh, 0 to 0.3 micrometres
+//! apart in a 2 m body, under the default 2.2 micrometres) therefore stay apart, where merging
+//! them would pinch the surface into non-manifold edges. (A collapse can still fold a feature
+//! smaller than the tolerance whose edges are all shorter than it, a needle-thin spike; such a
+//! feature is noise.) [`weld_map`] alone (used by `diagnose` to count near-duplicate vertices)
+//! looks at positions only.
 
+use super::topology::{Topology, NON_MANIFOLD};
 use super::TriMesh;
 use crate::math::{tol, Point3};
 use serde::Serialize;
@@ -91,6 +114,9 @@ pub struct WeldReport {
     pub vertices_after: usize,
     /// Vertices merged into an earlier one.
     pub welded: usize,
+    /// Vertices within the tolerance of a representative but kept apart, as merging them would
+    /// break a closed fan (see the module docs).
+    pub kept_apart: usize,
 }
 
 /// Gives each distinct position one index, in order of first appearance.
@@ -268,59 +294,171 @@ impl CellTable {
 
 /// The weld map: for each vertex, the representative it merges into (`map[i] <= i` holds for
 /// representatives' new indices in first-appearance order), and the number of representatives.
+/// Positions only: every vertex within the distance of a representative merges.
 pub fn weld_map(positions: &[Point3], distance: f64) -> (Vec<u32>, usize) {
-    let mut map = vec![0u32; positions.len()];
+    let w = weld_with(positions, distance, None);
+    (w.map, w.reps.pos.len())
+}
+
+/// Welds `positions`; with `mesh` (whose positions they are), only where the surface stays
+/// manifold (see the module docs).
+fn weld_with<'a>(positions: &[Point3], distance: f64, mesh: Option<&'a TriMesh>) -> Welder<'a> {
+    let mut w = Welder {
+        map: Vec::with_capacity(positions.len()),
+        reps: Reps::default(),
+        mesh,
+        seal: None,
+        kept_apart: 0,
+    };
     if distance == 0.0 || !distance.is_finite() {
-        let mut ix = ExactIndexer::with_capacity(positions.len());
-        for (i, p) in positions.iter().enumerate() {
-            map[i] = ix.index(*p);
-        }
-        return (map, ix.len());
+        w.exact(positions);
+    } else {
+        w.spatial(positions, distance);
     }
-    let cell = 8.0 * distance;
-    let inv = 1.0 / cell;
-    let d2 = distance * distance;
-    let cell_of = |x: f64| (x * inv).floor() as i64;
-    let mut cells = CellTable::with_capacity(positions.len());
-    // Representatives: their position, the next one in the same cell, and their new index.
-    let mut rep_next: Vec<u32> = Vec::new();
-    let mut rep_pos: Vec<Point3> = Vec::new();
-    for (i, p) in positions.iter().enumerate() {
-        let lo = [
-            cell_of(p.x - distance),
-            cell_of(p.y - distance),
-            cell_of(p.z - distance),
-        ];
-        let hi = [
-            cell_of(p.x + distance),
-            cell_of(p.y + distance),
-            cell_of(p.z + distance),
-        ];
-        let mut found = EMPTY;
-        'search: for cx in lo[0]..=hi[0] {
-            for cy in lo[1]..=hi[1] {
-                for cz in lo[2]..=hi[2] {
-                    let mut r = cells.head(&[cx, cy, cz]);
-                    while r != EMPTY {
-                        if (rep_pos[r as usize] - p).norm_squared() <= d2 {
-                            found = r;
-                            break 'search;
+    w
+}
+
+/// Representatives: their position, whether one of their vertices is sealed, and the next
+/// representative in the same bucket (a cell, or an exact position).
+#[derive(Default)]
+struct Reps {
+    pos: Vec<Point3>,
+    sealed: Vec<bool>,
+    next: Vec<u32>,
+}
+
+/// A weld in progress: the map of the vertices so far.
+struct Welder<'a> {
+    map: Vec<u32>,
+    reps: Reps,
+    /// The mesh whose surface must stay manifold, if any.
+    mesh: Option<&'a TriMesh>,
+    /// Its sealed vertices, found when the first merge is asked for (a mesh with nothing to
+    /// weld needs no topology).
+    seal: Option<Seal<'a>>,
+    /// Vertices that had a representative within the distance but could join none.
+    kept_apart: usize,
+}
+
+impl<'a> Welder<'a> {
+    /// Whether the next vertex may join representative `r` (see the module docs).
+    fn may_join(&mut self, r: u32) -> bool {
+        let Some(mesh) = self.mesh else { return true };
+        if self.seal.is_none() {
+            let seal = Seal::new(mesh);
+            for (u, &rep) in self.map.iter().enumerate() {
+                self.reps.sealed[rep as usize] |= seal.sealed[u];
+            }
+            self.seal = Some(seal);
+        }
+        let Some(seal) = &self.seal else { return true };
+        let i = self.map.len();
+        (!seal.sealed[i] && !self.reps.sealed[r as usize]) || seal.touches(i, r, &self.map)
+    }
+
+    /// The next vertex, at `p`, joins `r`, or with `EMPTY` becomes a representative, made the
+    /// head of its bucket by `link` (which returns the previous head). `near`: some
+    /// representative was within the distance.
+    fn settle(&mut self, p: &Point3, r: u32, near: bool, link: impl FnOnce(u32) -> u32) {
+        let sealed = self.seal.as_ref().is_some_and(|s| s.sealed[self.map.len()]);
+        let r = if r == EMPTY {
+            self.kept_apart += usize::from(near);
+            let id = self.reps.pos.len() as u32;
+            self.reps.pos.push(*p);
+            self.reps.sealed.push(sealed);
+            self.reps.next.push(link(id));
+            id
+        } else {
+            self.reps.sealed[r as usize] |= sealed;
+            r
+        };
+        self.map.push(r);
+    }
+
+    /// Distance 0: bitwise-equal positions ([`ExactIndexer`]).
+    fn exact(&mut self, positions: &[Point3]) {
+        let mut ix = ExactIndexer::with_capacity(positions.len());
+        // Per distinct position: the latest representative there.
+        let mut heads: Vec<u32> = Vec::new();
+        for p in positions {
+            let k = ix.index(*p) as usize;
+            if k == heads.len() {
+                heads.push(EMPTY);
+            }
+            let mut r = heads[k];
+            while r != EMPTY && !self.may_join(r) {
+                r = self.reps.next[r as usize];
+            }
+            let near = heads[k] != EMPTY;
+            self.settle(p, r, near, |id| std::mem::replace(&mut heads[k], id));
+        }
+    }
+
+    /// A positive distance: the spatial hash (see the module docs).
+    fn spatial(&mut self, positions: &[Point3], distance: f64) {
+        let inv = 1.0 / (8.0 * distance);
+        let d2 = distance * distance;
+        let cell_of = |x: f64| (x * inv).floor() as i64;
+        let mut cells = CellTable::with_capacity(positions.len());
+        for p in positions {
+            let lo = [p.x, p.y, p.z].map(|c| cell_of(c - distance));
+            let hi = [p.x, p.y, p.z].map(|c| cell_of(c + distance));
+            let (mut found, mut near) = (EMPTY, false);
+            'search: for cx in lo[0]..=hi[0] {
+                for cy in lo[1]..=hi[1] {
+                    for cz in lo[2]..=hi[2] {
+                        let mut r = cells.head(&[cx, cy, cz]);
+                        while r != EMPTY {
+                            if (self.reps.pos[r as usize] - p).norm_squared() <= d2 {
+                                near = true;
+                                if self.may_join(r) {
+                                    found = r;
+                                    break 'search;
+                                }
+                            }
+                            r = self.reps.next[r as usize];
                         }
-                        r = rep_next[r as usize];
                     }
                 }
             }
+            let c = [p.x, p.y, p.z].map(cell_of);
+            self.settle(p, found, near, |id| cells.push(c, id));
         }
-        if found == EMPTY {
-            let id = rep_pos.len() as u32;
-            let c = [cell_of(p.x), cell_of(p.y), cell_of(p.z)];
-            rep_next.push(cells.push(c, id));
-            rep_pos.push(*p);
-            found = id;
-        }
-        map[i] = found;
     }
-    (map, rep_pos.len())
+}
+
+/// What [`weld`] must not break: which vertices are sealed, and the faces around each.
+struct Seal<'a> {
+    mesh: &'a TriMesh,
+    topo: Topology,
+    /// Per vertex: it has faces, and every edge at it has exactly two.
+    sealed: Vec<bool>,
+}
+
+impl<'a> Seal<'a> {
+    fn new(mesh: &'a TriMesh) -> Seal<'a> {
+        let topo = Topology::build(mesh);
+        let mut sealed: Vec<bool> = (0..mesh.positions.len() as u32)
+            .map(|v| !topo.vertex_faces(v).is_empty())
+            .collect();
+        for (h, &o) in topo.opp.iter().enumerate() {
+            if o >= NON_MANIFOLD {
+                let f = &mesh.faces[h / 3];
+                sealed[f[h % 3] as usize] = false;
+                sealed[f[(h + 1) % 3] as usize] = false;
+            }
+        }
+        Seal { mesh, topo, sealed }
+    }
+
+    /// Whether vertex `i` shares an edge with an earlier vertex that `map` sends to `r`.
+    fn touches(&self, i: usize, r: u32, map: &[u32]) -> bool {
+        self.topo.vertex_faces(i as u32).iter().any(|&f| {
+            self.mesh.faces[f as usize]
+                .iter()
+                .any(|&u| (u as usize) < i && map[u as usize] == r)
+        })
+    }
 }
 
 /// Welds `mesh` in place; see the module docs. Vertices keep the order of their first
@@ -328,7 +466,10 @@ pub fn weld_map(positions: &[Point3], distance: f64) -> (Vec<u32>, usize) {
 pub fn weld(mesh: &mut TriMesh, tolerance: WeldTolerance) -> WeldReport {
     let before = mesh.positions.len();
     let distance = tolerance.distance(mesh.diagonal());
-    let (map, count) = weld_map(&mesh.positions, distance);
+    let (map, count, kept_apart) = {
+        let w = weld_with(&mesh.positions, distance, Some(mesh));
+        (w.map, w.reps.pos.len(), w.kept_apart)
+    };
     let mut positions = vec![Point3::origin(); count];
     // The representative's own position: the first vertex mapped to each new index.
     let mut seen = vec![false; count];
@@ -350,12 +491,14 @@ pub fn weld(mesh: &mut TriMesh, tolerance: WeldTolerance) -> WeldReport {
         vertices_before: before,
         vertices_after: count,
         welded: before - count,
+        kept_apart,
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::Vec3;
 
     #[test]
     fn parse_tolerance() {
@@ -410,6 +553,126 @@ mod tests {
             .collect();
         let (map, n) = weld_map(&p, 1.0);
         assert_eq!((map, n), (vec![0, 0, 1], 2));
+    }
+
+    /// Two unit cubes, centred on the origin and on `offset`: for `offset = (1 + g) (1, 1, 1)`
+    /// their nearest corners are `g sqrt 3` apart.
+    fn two_cubes(offset: Vec3) -> TriMesh {
+        let mut m = crate::mesh::generate::cube(1.0);
+        let b = m.clone();
+        let n = m.positions.len() as u32;
+        m.positions.extend(b.positions.iter().map(|p| p + offset));
+        m.faces.extend(b.faces.iter().map(|f| f.map(|v| v + n)));
+        m
+    }
+
+    #[test]
+    fn closed_surfaces_touching_within_the_tolerance_stay_apart() {
+        // Exactly touching corners (the exact path), and 1e-9 apart (the spatial hash).
+        for (gap, tolerance) in [
+            (0.0, WeldTolerance::Absolute(0.0)),
+            (0.0, WeldTolerance::default()),
+            (1e-9, WeldTolerance::default()),
+        ] {
+            let mut m = two_cubes(Vec3::repeat(1.0 + gap));
+            let r = weld(&mut m, tolerance);
+            assert_eq!((r.welded, r.kept_apart), (0, 1), "gap {gap}");
+            let d = crate::mesh::diagnose::diagnose(&m);
+            assert!(d.watertight && d.non_manifold_vertices == 0, "gap {gap}");
+        }
+    }
+
+    #[test]
+    fn a_soup_still_welds() {
+        // Every corner its own vertex, with float noise on the copies: nothing is sealed.
+        let orig = crate::mesh::generate::icosphere(2);
+        let mut soup = TriMesh::default();
+        for (f, face) in orig.faces.iter().enumerate() {
+            for &v in face {
+                let noise = if f % 2 == 0 { 0.0 } else { 1e-12 };
+                soup.positions
+                    .push(orig.positions[v as usize] + Vec3::repeat(noise));
+            }
+            let b = 3 * f as u32;
+            soup.faces.push([b, b + 1, b + 2]);
+        }
+        let r = weld(&mut soup, WeldTolerance::default());
+        assert_eq!((r.vertices_after, r.kept_apart), (orig.positions.len(), 0));
+        assert!(crate::mesh::diagnose::diagnose(&soup).watertight);
+    }
+
+    /// A bipyramid over a ring of five points, apexes at z = +-1, with ring point 1 moved to
+    /// `1e-9` from ring point 0 (a sliver edge on a closed surface).
+    fn bipyramid_with_sliver() -> TriMesh {
+        let mut p: Vec<Point3> = (0..5)
+            .map(|i| {
+                let t = std::f64::consts::TAU * i as f64 / 5.0;
+                Point3::new(t.cos(), t.sin(), 0.0)
+            })
+            .collect();
+        p[1] = p[0] + Vec3::new(0.0, 1e-9, 0.0);
+        p.push(Point3::new(0.0, 0.0, 1.0));
+        p.push(Point3::new(0.0, 0.0, -1.0));
+        let faces = (0..5)
+            .flat_map(|i| {
+                let j = (i + 1) % 5;
+                [[i, j, 5], [j, i, 6]]
+            })
+            .collect();
+        TriMesh::new(p, faces)
+    }
+
+    /// A cone over a ring of `n` points whose tip is written as a ring of `n` coincident
+    /// points around a hub (the tip's faces have no area): closed, every vertex sealed.
+    fn cone_with_ring_tip(n: u32) -> TriMesh {
+        let mut p: Vec<Point3> = (0..n)
+            .map(|i| {
+                let t = std::f64::consts::TAU * i as f64 / n as f64;
+                Point3::new(t.cos(), t.sin(), 0.0)
+            })
+            .collect();
+        p.extend((0..=n).map(|_| Point3::new(0.0, 0.0, 1.0)));
+        p.push(Point3::origin());
+        let (hub, base) = (2 * n, 2 * n + 1);
+        let faces = (0..n)
+            .flat_map(|i| {
+                let j = (i + 1) % n;
+                [
+                    [j, i, base],
+                    [i, j, n + j],
+                    [i, n + j, n + i],
+                    [n + i, n + j, hub],
+                ]
+            })
+            .collect();
+        TriMesh::new(p, faces)
+    }
+
+    #[test]
+    fn short_edges_of_a_closed_surface_collapse() {
+        use super::super::prepare::{prepare, PrepareOptions};
+        let mut m = bipyramid_with_sliver();
+        let r = prepare(&mut m, &PrepareOptions::default());
+        assert_eq!(
+            (r.welded_vertices, r.weld.map(|w| w.kept_apart)),
+            (1, Some(0))
+        );
+        assert_eq!((m.positions.len(), m.faces.len()), (6, 8));
+        assert!(r.after.watertight && r.after.non_manifold_vertices == 0);
+        // A ring of coincident points collapses whole, through its edges: each point touches a
+        // point already merged.
+        let mut m = cone_with_ring_tip(7);
+        assert!(crate::mesh::diagnose::diagnose(&m).watertight);
+        let r = prepare(&mut m, &PrepareOptions::default());
+        assert_eq!(
+            (r.welded_vertices, r.weld.map(|w| w.kept_apart)),
+            (7, Some(0))
+        );
+        assert_eq!((m.positions.len(), m.faces.len()), (9, 14));
+        assert_eq!(
+            r.after.shell_state,
+            crate::mesh::diagnose::ShellState::Closed
+        );
     }
 
     #[test]

@@ -6,7 +6,6 @@ use crate::cloth::elements::SpringKind;
 use crate::cloth::model::ClothModel;
 use crate::collide::Collider;
 use crate::math::{Point3, Vec3};
-use crate::mesh::orient::solid_angle;
 use rayon::prelude::*;
 
 /// Largest and mean strain (edge length over rest length, minus one) of the stretch springs.
@@ -26,19 +25,12 @@ pub fn strain(model: &ClothModel, x: &[Point3]) -> (f64, f64) {
     )
 }
 
-/// Whether `p` is inside the closed surface of `c`: its generalized winding number is above 1/2
-/// (robust to small holes and to particles near the surface).
+/// Whether `p` is inside the surface of `c`: its winding number is positive. Closed objects
+/// count the crossings of a ray through the object's grid (exact, O(cells along the ray)); open
+/// ones, and points on the surface to rounding, use the generalized winding number (above 1/2:
+/// robust to small holes). See `collide::inside`.
 pub fn inside(c: &Collider, p: &Point3) -> bool {
-    if !c.bbox.contains(p, 0.0) {
-        return false;
-    }
-    let w: f64 = (0..c.mesh.faces.len())
-        .map(|f| {
-            let [a, b, cc] = c.mesh.corners(f);
-            solid_angle(p, &a, &b, &cc)
-        })
-        .sum();
-    w / (4.0 * std::f64::consts::PI) > 0.5
+    crate::collide::inside::inside(c, p)
 }
 
 /// Particles inside a closed object, per object (`None` for open objects).
