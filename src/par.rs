@@ -75,6 +75,19 @@ where
     }
 }
 
+/// Runs `body(i, &mut a[i])` for every item, in parallel when `parallel` (the caller decides
+/// from the work behind the items, e.g. `parallel(particles)` for per-chunk buffers).
+pub fn for_each_mut<A: Send, F>(a: &mut [A], parallel: bool, body: F)
+where
+    F: Fn(usize, &mut A) + Sync,
+{
+    if parallel && rayon::current_num_threads() > 1 {
+        a.par_iter_mut().enumerate().for_each(|(i, x)| body(i, x));
+    } else {
+        a.iter_mut().enumerate().for_each(|(i, x)| body(i, x));
+    }
+}
+
 /// `sum_i f(i)` over `0..n`, added chunk by chunk in order (the same bits for any thread count).
 pub fn sum<F>(n: usize, f: F) -> f64
 where
