@@ -2,6 +2,7 @@
 //! body and let it hang, with no scene file.
 
 use crate::cloth::fabric::Fabric;
+use crate::collide::cloth::{SelfCollisionOptions, SelfStats};
 use crate::garment::drape::{self as gd, GarmentSettings, StageReport};
 use crate::garment::measure::{self, Measures, Thresholds};
 use crate::io::{self, ReadOptions};
@@ -44,11 +45,17 @@ pub struct GarmentArgs {
     #[arg(long, default_value = "auto")]
     pub body_units: String,
     /// Longest sewing stage, simulated s.
-    #[arg(long, default_value_t = 2.0)]
+    #[arg(long, default_value_t = 4.0)]
     pub sew_max: f64,
     /// Longest drape after sewing, simulated s.
     #[arg(long, default_value_t = 8.0)]
     pub settle_max: f64,
+    /// Turn cloth-against-cloth contact off (faster; panels may pass through each other).
+    #[arg(long)]
+    pub no_self_collision: bool,
+    /// Friction between layers of cloth (Coulomb, a fraction of the normal impulse).
+    #[arg(long, default_value_t = 0.0)]
+    pub cloth_friction: f64,
 }
 
 /// The report of `drapekit garment`.
@@ -72,6 +79,8 @@ pub struct GarmentReport {
     pub triangles: usize,
     /// Seam springs.
     pub seam_springs: usize,
+    /// Cloth-against-cloth contact over both stages (`null`: off).
+    pub self_contact: Option<SelfStats>,
     /// Stage 1.
     pub sew: StageReport,
     /// Stage 2.
@@ -156,8 +165,13 @@ fn settings(args: &GarmentArgs) -> anyhow::Result<GarmentSettings> {
     positive(args.spacing, "--spacing")?;
     positive(args.sew_max, "--sew-max")?;
     positive(args.settle_max, "--settle-max")?;
-    if !(args.friction.is_finite() && args.friction >= 0.0) {
-        bail!("--friction {}: must be 0 or more", args.friction);
+    for (v, flag) in [
+        (args.friction, "--friction"),
+        (args.cloth_friction, "--cloth-friction"),
+    ] {
+        if !(v.is_finite() && v >= 0.0) {
+            bail!("{flag} {v}: must be 0 or more");
+        }
     }
     if args.spacing < 0.002 || args.spacing > 0.1 {
         bail!("--spacing {} m: use 0.002 to 0.1 m", args.spacing);
@@ -168,6 +182,10 @@ fn settings(args: &GarmentArgs) -> anyhow::Result<GarmentSettings> {
     s.friction = args.friction;
     s.sew_max = args.sew_max;
     s.settle_max = args.settle_max;
+    s.self_collision = (!args.no_self_collision).then(|| SelfCollisionOptions {
+        friction: args.cloth_friction,
+        ..SelfCollisionOptions::default()
+    });
     Ok(s)
 }
 
@@ -283,6 +301,7 @@ pub fn run(args: GarmentArgs) -> anyhow::Result<()> {
         particles: g.world.model.len(),
         triangles: g.world.model.triangles.len(),
         seam_springs: g.seams.len(),
+        self_contact: g.world.self_contact.as_ref().map(|s| s.totals),
         sew: g.sew,
         drape: g.drape,
         moving_fraction: moving,
@@ -344,6 +363,16 @@ fn print_summary(r: &GarmentReport) {
         w.seam_gap_mean_mm,
         w.particles_inside,
         w.max_strain * 100.0
+    );
+    println!(
+        "  crossing edges: {} through the body, {} through the cloth{}",
+        w.body_crossing_edges,
+        w.self_crossing_edges,
+        if r.self_contact.is_none() {
+            " (self-collision off)"
+        } else {
+            ""
+        }
     );
     println!("  verdict: {} in {:.1} s", r.verdict, r.wall_seconds);
     for f in &r.failed {

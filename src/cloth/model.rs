@@ -63,6 +63,9 @@ pub struct ClothModel {
     pub pieces: Vec<PieceRange>,
     /// Gravity, m/s^2.
     pub gravity: Vec3,
+    /// Extra force per particle, N, held constant through a step (empty: none). Sewing pulls
+    /// seam sides with it (`garment::drape`).
+    pub external: Vec<Vec3>,
 }
 
 impl ClothModel {
@@ -90,6 +93,7 @@ impl ClothModel {
             triangles: Vec::new(),
             pieces: Vec::new(),
             gravity,
+            external: Vec::new(),
         };
         let mut x = Vec::new();
         for (name, p, fabric, placed) in pieces {

@@ -31,6 +31,10 @@ pub struct Collider {
     pub margin: f64,
     /// Friction of this object (fraction of the tangential force), if it has its own.
     pub friction: Option<f64>,
+    /// Extra distance kept between particles and this object's faces, on top of each
+    /// particle's thickness, m (default 0; garments keep a clearance from the body so that
+    /// cloth edges between resting particles do not dip through it).
+    pub clearance: f64,
     /// Whether the mesh is watertight (inside tests make sense).
     pub closed: bool,
     /// Per face: every vertex of the faces around it lies on or behind its plane (the surface is
@@ -112,6 +116,7 @@ impl Collider {
             dims,
             margin,
             friction,
+            clearance: 0.0,
             closed,
             convex,
             grid: OnceLock::new(),

@@ -152,6 +152,7 @@ pub fn resolve(
     // Sliding: stay on the face, or move to one around it.
     if let Some(ct) = *contact {
         let c = &colliders[ct.object as usize];
+        let th = th + c.clearance;
         // Held while the projection is inside the face and the particle has not left it; pushed
         // out to the thickness if it came closer, never pulled in.
         let keep = |f: usize, side: f64, p1: &Point3| -> Option<Point3> {
@@ -195,7 +196,7 @@ pub fn resolve(
     // A step that starts and ends in one empty cell of every object meets nothing.
     if !touched
         && colliders.iter().enumerate().all(|(oi, c)| {
-            if !reachable[oi] || !near(c, p0, p1, th + c.margin) {
+            if !reachable[oi] || !near(c, p0, p1, th + c.clearance + c.margin) {
                 return true;
             }
             let g = c.grid();
@@ -213,7 +214,7 @@ pub fn resolve(
         for _ in 0..3 {
             let mut best: Option<Crossing> = None;
             for (oi, c) in colliders.iter().enumerate() {
-                if !reachable[oi] || !near(c, p0, p1, th + c.margin) {
+                if !reachable[oi] || !near(c, p0, p1, th + c.clearance + c.margin) {
                     continue;
                 }
                 let grid = c.grid();
@@ -237,6 +238,7 @@ pub fn resolve(
             }
             let Some(h) = best else { break };
             let c = &colliders[h.object];
+            let th = th + c.clearance;
             let f = h.face as usize;
             let (n, off) = c.plane(f);
             let q1 = *p1 - n * (p1.coords.dot(&n) - off);
@@ -259,10 +261,11 @@ pub fn resolve(
     // thickness from every face around: nothing more to check.
     let convex_hold = matches!(*contact, Some(ct) if ct.side > 0.0 && colliders[ct.object as usize].convex[ct.face as usize]);
     // Thickness: push out of every face nearer than th, along its normal or away from its edge.
-    if th > 0.0 && !convex_hold {
+    if (th > 0.0 || colliders.iter().any(|c| c.clearance > 0.0)) && !convex_hold {
         for _ in 0..2 {
             let mut moved = false;
             for (oi, c) in colliders.iter().enumerate() {
+                let th = th + c.clearance;
                 if !reachable[oi] || !c.bbox.contains(p1, th + c.margin) {
                     continue;
                 }
@@ -329,6 +332,38 @@ mod tests {
         ];
         let m = crate::mesh::TriMesh::new(p, vec![[0, 1, 2], [2, 3, 0]]);
         Collider::new("floor".into(), m, [4, 4, 1], 0.01, None)
+    }
+
+    #[test]
+    fn an_objects_clearance_adds_to_the_thickness() {
+        let mut c = unit_square();
+        c.clearance = 0.004;
+        let objects = [c];
+        // Where a step from p0 to p1 ends, with thickness 0.01 m.
+        let put = |p0: Point3, p1: Point3, contact: &mut Option<Contact>| {
+            let (mut p, mut v) = (p1, Vec3::new(0.5, 0.0, -35.0));
+            resolve(&objects, &[true], &p0, &mut p, &mut v, 0.01, contact);
+            p.z
+        };
+        let mut contact = None;
+        // Through the face: put at thickness + clearance.
+        let through = Point3::new(0.25, 0.3, -3.0);
+        assert!((put(Point3::new(0.2, 0.3, 0.5), through, &mut contact) - 0.014).abs() < 1e-12);
+        assert!(contact.is_some());
+        // Held in contact: a step towards the face stops at the same distance.
+        let held = put(
+            Point3::new(0.25, 0.3, 0.014),
+            Point3::new(0.3, 0.3, 0.012),
+            &mut contact,
+        );
+        assert!((held - 0.014).abs() < 1e-12, "{held}");
+        // Arriving within the clearance (not through the face): pushed out too.
+        let near = put(
+            Point3::new(0.5, 0.5, 0.3),
+            Point3::new(0.5, 0.5, 0.013),
+            &mut None,
+        );
+        assert!((near - 0.014).abs() < 1e-12, "{near}");
     }
 
     #[test]

@@ -33,6 +33,7 @@ use crate::cloth::model::ClothModel;
 use crate::cloth::pattern;
 use crate::cloth::stability;
 use crate::cloth::state::{ClothState, Contact};
+use crate::collide::cloth::{resolve_self, ClothHash, SelfCloth, SelfCollisionOptions, SelfStats};
 use crate::collide::contact;
 use crate::collide::Collider;
 use crate::math::{Aabb, Point3, Vec3};
@@ -96,6 +97,52 @@ pub struct World {
     pub stable_step: f64,
     /// Step at which each object's grid was first needed (`None`: never).
     pub grid_built_at: Vec<Option<u64>>,
+    /// Cloth against cloth, when the scene needs it (`None`: off, the default).
+    pub self_contact: Option<SelfContact>,
+}
+
+/// Cloth-against-cloth contact in the step loop: its options and the hash it keeps between
+/// steps (`collide::cloth`).
+#[derive(Debug)]
+pub struct SelfContact {
+    /// The options.
+    pub options: SelfCollisionOptions,
+    /// The triangles' hash, with the seams welded.
+    pub hash: ClothHash,
+    /// Totals over the steps run so far (`seconds` the wall time).
+    pub totals: SelfStats,
+}
+
+impl SelfContact {
+    /// Self-contact for `model`, the particle pairs of `seams` welded (sewn sides do not push
+    /// each other apart).
+    pub fn new(model: &ClothModel, seams: &[[u32; 2]], options: SelfCollisionOptions) -> Self {
+        SelfContact {
+            options,
+            hash: ClothHash::new(model.len(), &model.triangles, seams),
+            totals: SelfStats::default(),
+        }
+    }
+
+    /// The self-contact phase of a step from `x0` to `x1` (velocities `v1`), corrected in place.
+    pub fn apply(
+        &mut self,
+        model: &ClothModel,
+        x0: &[Point3],
+        x1: &mut [Point3],
+        v1: &mut [Vec3],
+        dt: f64,
+    ) {
+        let cloth = SelfCloth::new(&model.triangles, &model.thickness, &model.inv_mass);
+        let s = resolve_self(x0, x1, v1, cloth, &mut self.hash, &self.options, dt);
+        let t = &mut self.totals;
+        t.candidates += s.candidates;
+        t.contacts += s.contacts;
+        t.corrected += s.corrected;
+        t.approaching += s.approaching;
+        t.remaining = s.remaining;
+        t.seconds += s.seconds;
+    }
 }
 
 /// The rotation of `deg` degrees about x, then y, then z.
@@ -210,6 +257,7 @@ impl World {
             max_frequency,
             stable_step,
             grid_built_at: vec![None; n],
+            self_contact: None,
         }
     }
 }
@@ -246,7 +294,8 @@ pub struct Predicted {
     pub y: Vec<Point3>,
 }
 
-/// The predict phase: gravity on each particle, and where it would go without internal forces.
+/// The predict phase: gravity and the model's extra forces on each particle, and where it would
+/// go without internal forces.
 pub fn predict(model: &ClothModel, state: &ClothState, dt: f64, out: &mut Predicted) {
     let n = model.len();
     out.f_ext.resize(n, Vec3::zeros());
@@ -262,11 +311,12 @@ pub fn predict(model: &ClothModel, state: &ClothState, dt: f64, out: &mut Predic
         |base, fs, ys, _| {
             for k in 0..fs.len() {
                 let i = base + k;
-                fs[k] = model.gravity * model.mass[i];
+                let extra = model.external.get(i).copied().unwrap_or_else(Vec3::zeros);
+                fs[k] = model.gravity * model.mass[i] + extra;
                 ys[k] = if model.pinned(i) {
                     x[i]
                 } else {
-                    x[i] + v[i] * dt + model.gravity * (dt * dt)
+                    x[i] + v[i] * dt + (model.gravity + extra * model.inv_mass[i]) * (dt * dt)
                 };
             }
         },
@@ -394,6 +444,7 @@ pub fn run(
                 model,
                 state,
                 colliders,
+                self_contact,
                 ..
             } = &mut *world;
             let input = StepIn {
@@ -418,6 +469,12 @@ pub fn run(
             // at large steps) is counted as work put in; explicit steps are too small to need it.
             let before = (!integrator.is_explicit())
                 .then(|| watch::mechanical(model, &x_new, &v_new, &state.x));
+            // Cloth against cloth first: the body pass has the last word, so the self pass
+            // never leaves a particle inside the body (a particle that starts a step inside is
+            // not caught by the body's segment test).
+            if let Some(sc) = self_contact {
+                sc.apply(model, &state.x, &mut x_new, &mut v_new, dt);
+            }
             travel = collide(
                 model,
                 colliders,
@@ -432,7 +489,13 @@ pub fn run(
             if let Some(e) = before {
                 watch.add_work(watch::mechanical(model, &x_new, &v_new, &state.x) - e);
             }
-            if reach.iter().any(|&r| r) {
+            if !model.external.is_empty() {
+                let w = par::sum(x_new.len(), |i| {
+                    model.external[i].dot(&(x_new[i] - state.x[i]))
+                });
+                watch.add_work(w);
+            }
+            if reach.iter().any(|&r| r) || self_contact.is_some() {
                 stats.collision_seconds += t.elapsed().as_secs_f64();
             }
         }

@@ -220,8 +220,10 @@ impl ProjectiveDynamics {
         let mut e = Self::objective(input, p);
         for (i, c) in self.contact.iter().enumerate() {
             let Some(ct) = c else { continue };
-            let (n, off) = colliders[ct.object as usize].plane(ct.face as usize);
-            let depth = input.model.thickness[i] - ct.side * (p[i].coords.dot(&n) - off);
+            let c = &colliders[ct.object as usize];
+            let (n, off) = c.plane(ct.face as usize);
+            let th = input.model.thickness[i] + c.clearance;
+            let depth = th - ct.side * (p[i].coords.dot(&n) - off);
             if depth > 0.0 {
                 e += 0.5 * self.weight[i] * depth * depth;
             }
@@ -311,14 +313,15 @@ impl ProjectiveDynamics {
                 continue;
             };
             let c = &colliders[ct.object as usize];
-            let face = nearest_front(c, ct, &self.p[i], model.thickness[i]);
+            let th = model.thickness[i] + c.clearance;
+            let face = nearest_front(c, ct, &self.p[i], th);
             let (n, off) = c.plane(face);
             self.target[i] = contact_target(
                 &self.p[i],
                 &x[i],
                 &(n * ct.side),
                 ct.side * off,
-                model.thickness[i],
+                th,
                 contact_friction(colliders, model, ct, i),
             );
         }
