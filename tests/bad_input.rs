@@ -368,3 +368,30 @@ fn report_path_equal_to_output_is_refused() {
     assert_eq!(o.status.code(), Some(1));
     assert!(!Path::new(&out).exists());
 }
+
+#[test]
+fn garment_flags_out_of_range_are_refused_before_any_work() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    for (flag, value) in [
+        ("--body-clearance", "-0.001"),
+        ("--cloth-friction", "NaN"),
+        ("--friction", "-1"),
+        ("--spacing", "0"),
+    ] {
+        let arg = format!("{flag}={value}");
+        let o = run(&[
+            "garment",
+            "no_pattern.json",
+            "--body",
+            "no_body.obj",
+            "-o",
+            out.to_str().unwrap(),
+            &arg,
+        ]);
+        let (_, err) = text(&o);
+        assert_eq!(o.status.code(), Some(1), "{flag}: {err}");
+        assert!(err.contains(flag) && err.contains(value), "{flag}: {err}");
+        assert!(listing(dir.path()).is_empty(), "{flag}: nothing written");
+    }
+}

@@ -6,7 +6,7 @@ mod common;
 use common::realdata;
 use drapekit::collide::Collider;
 use drapekit::io::{read_mesh, ReadOptions};
-use drapekit::math::{Point3, SplitMix, Vec3};
+use drapekit::math::{Point3, Vec3};
 use drapekit::mesh::diagnose::ShellState;
 use drapekit::mesh::orient::solid_angle;
 use drapekit::mesh::prepare::{prepare, PrepareOptions, PrepareReport};
@@ -14,7 +14,6 @@ use drapekit::mesh::TriMesh;
 use drapekit::sim::inside;
 use rayon::prelude::*;
 use std::path::PathBuf;
-use std::time::Instant;
 
 const BODIES: [&str; 4] = [
     "mean_all",
@@ -156,54 +155,4 @@ fn fast_inside_test_agrees_with_the_winding_number() {
         let inner = results.iter().filter(|r| r.0).count();
         assert!(inner > points.len() / 4, "{name}: {inner} inside");
     }
-}
-
-/// The time of counting the particles inside, old (winding number) against new (ray crossings),
-/// for 14,000 random points in mean_all's box: median of 3 each. Run by hand:
-/// `cargo test --release --test bodies -- --ignored --nocapture`.
-#[test]
-#[ignore]
-fn inside_speed_on_mean_all() {
-    let Some((_, _, c)) = load("mean_all") else {
-        return;
-    };
-    let mut rng = SplitMix(2024);
-    let size = c.bbox.size();
-    let points: Vec<Point3> = (0..14_000)
-        .map(|_| {
-            let t = Vec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64());
-            c.bbox.min + size.component_mul(&t)
-        })
-        .collect();
-    let t = Instant::now();
-    c.grid();
-    let grid_s = t.elapsed().as_secs_f64();
-    let time = |count: &dyn Fn() -> usize| {
-        let mut runs: Vec<(f64, usize)> = (0..3)
-            .map(|_| {
-                let t = Instant::now();
-                let n = count();
-                (t.elapsed().as_secs_f64(), n)
-            })
-            .collect();
-        runs.sort_by(|a, b| a.0.total_cmp(&b.0));
-        runs[1]
-    };
-    let (old_s, old_n) = time(&|| {
-        points
-            .par_iter()
-            .filter(|p| inside_by_winding(&c.mesh, p))
-            .count()
-    });
-    let (new_s, new_n) = time(&|| points.par_iter().filter(|p| inside(&c, p)).count());
-    println!(
-        "mean_all: {} points, {} faces, cells {:?}, {} threads: winding number {old_s:.3} s, \
-         ray crossings {new_s:.4} s (grid built in {grid_s:.3} s), {:.0} times faster; {old_n} inside",
-        points.len(),
-        c.mesh.faces.len(),
-        c.dims,
-        rayon::current_num_threads(),
-        old_s / new_s
-    );
-    assert_eq!(old_n, new_n);
 }

@@ -25,6 +25,10 @@ pub enum BenchCommand {
     Speed(super::bench_speed::SpeedBench),
     /// The implicit integrators on real cotton: convergence of a step, damping, statics.
     Solver(super::bench_solver::SolverBench),
+    /// Cloth against cloth: one step of self-contact on a 1 m sheet, one and two threads.
+    SelfContact(super::bench_self::SelfContactBench),
+    /// The inside test on a closed body: ray crossings against the winding number.
+    Inside(super::bench_inside::InsideBench),
 }
 
 /// Arguments of `drapekit bench fit`.
@@ -70,6 +74,8 @@ pub fn run(cmd: BenchCommand) -> anyhow::Result<()> {
         BenchCommand::Drape(a) => super::bench_drape::run(a),
         BenchCommand::Speed(a) => super::bench_speed::run(a),
         BenchCommand::Solver(a) => super::bench_solver::run(a),
+        BenchCommand::SelfContact(a) => super::bench_self::run(a),
+        BenchCommand::Inside(a) => super::bench_inside::run(a),
     }
 }
 

@@ -50,6 +50,10 @@ pub struct GarmentArgs {
     /// Longest drape after sewing, simulated s.
     #[arg(long, default_value_t = 8.0)]
     pub settle_max: f64,
+    /// Extra distance kept between the cloth and the body, m (default: an eighth of the
+    /// spacing; edges between resting particles then stay out of a curved or faceted body).
+    #[arg(long, value_name = "M")]
+    pub body_clearance: Option<f64>,
     /// Turn cloth-against-cloth contact off (faster; panels may pass through each other).
     #[arg(long)]
     pub no_self_collision: bool,
@@ -168,6 +172,7 @@ fn settings(args: &GarmentArgs) -> anyhow::Result<GarmentSettings> {
     for (v, flag) in [
         (args.friction, "--friction"),
         (args.cloth_friction, "--cloth-friction"),
+        (args.body_clearance.unwrap_or(0.0), "--body-clearance"),
     ] {
         if !(v.is_finite() && v >= 0.0) {
             bail!("{flag} {v}: must be 0 or more");
@@ -182,6 +187,7 @@ fn settings(args: &GarmentArgs) -> anyhow::Result<GarmentSettings> {
     s.friction = args.friction;
     s.sew_max = args.sew_max;
     s.settle_max = args.settle_max;
+    s.body_clearance = args.body_clearance;
     s.self_collision = (!args.no_self_collision).then(|| SelfCollisionOptions {
         friction: args.cloth_friction,
         ..SelfCollisionOptions::default()

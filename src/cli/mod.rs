@@ -5,6 +5,8 @@
 mod bench;
 mod bench_drape;
 mod bench_fit;
+mod bench_inside;
+mod bench_self;
 mod bench_solver;
 mod bench_speed;
 mod convert;

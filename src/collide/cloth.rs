@@ -1674,48 +1674,10 @@ pub fn resolve_self(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::collide::sheets::{crumpled, grid, join};
     use crate::math::SplitMix;
     use crate::mesh::closest::closest_on_triangle;
     use crate::mesh::generate;
-
-    /// A grid of `nu x nv` particles at `f(i, j)`, each cell split along its `(i, j)-(i+1, j+1)`
-    /// diagonal, particles numbered from `first`.
-    pub(super) fn grid(
-        nu: usize,
-        nv: usize,
-        first: u32,
-        f: impl Fn(usize, usize) -> Point3,
-    ) -> (Vec<Point3>, Vec<[u32; 3]>) {
-        let mut x = Vec::with_capacity(nu * nv);
-        for i in 0..nu {
-            for j in 0..nv {
-                x.push(f(i, j));
-            }
-        }
-        let id = |i: usize, j: usize| first + (i * nv + j) as u32;
-        let mut t = Vec::new();
-        for i in 0..nu - 1 {
-            for j in 0..nv - 1 {
-                let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
-                t.push([a, b, c]);
-                t.push([c, d, a]);
-            }
-        }
-        (x, t)
-    }
-
-    /// Two meshes as one cloth.
-    pub(super) fn join(
-        a: (Vec<Point3>, Vec<[u32; 3]>),
-        b: (Vec<Point3>, Vec<[u32; 3]>),
-    ) -> (Vec<Point3>, Vec<[u32; 3]>) {
-        let off = a.0.len() as u32;
-        let mut x = a.0;
-        x.extend(b.0);
-        let mut t = a.1;
-        t.extend(b.1.iter().map(|t| t.map(|v| v + off)));
-        (x, t)
-    }
 
     /// One `resolve_self` with the default options and a 1 ms step.
     fn step(
@@ -2198,37 +2160,6 @@ mod tests {
         assert_eq!(body_crossing_edges(&collider, &far, &t), 0);
     }
 
-    /// A `k x k` sheet of edge `size` crumpled at random (fixed seed): folded in five like an
-    /// accordion with `gap` between the layers, waved (every layer alike, so they stay apart),
-    /// jittered (across by a third of an edge, up and down by a quarter of the gap).
-    pub(super) fn crumpled(
-        k: usize,
-        size: f64,
-        seed: u64,
-        gap: f64,
-    ) -> (Vec<Point3>, Vec<[u32; 3]>) {
-        let mut rng = SplitMix(seed);
-        let (a, b, ph) = (rng.next_f64(), rng.next_f64(), 6.0 * rng.next_f64());
-        let jitter: Vec<f64> = (0..3 * k * k).map(|_| rng.next_f64() - 0.5).collect();
-        let layers = 5.0;
-        let e = size / (k - 1) as f64;
-        grid(k, k, 0, |i, j| {
-            let (u, v) = (i as f64 / (k - 1) as f64, j as f64 / (k - 1) as f64);
-            let w = u * layers;
-            let layer = w.floor().min(layers - 1.0);
-            let f = w - layer;
-            let along = if layer as i64 % 2 == 0 { f } else { 1.0 - f };
-            let r = 3 * (i * k + j);
-            Point3::new(
-                size / layers * along + 0.3 * e * jitter[r],
-                size * v + 0.3 * e * jitter[r + 1],
-                layer * gap
-                    + 0.01 * size * ((3.0 + a) * along + ph).sin() * ((5.0 + b) * v).cos()
-                    + 0.5 * gap * jitter[r + 2],
-            )
-        })
-    }
-
     #[test]
     fn the_hash_finds_the_pairs_a_brute_force_search_finds() {
         let (x, t) = crumpled(24, 0.2, 11, 0.0004);
@@ -2441,97 +2372,5 @@ mod tests {
             cell: Some(f64::NAN),
             ..Default::default()
         }));
-    }
-
-    /// A `k x k` sheet of edge `size` wrapped round a vertical cylinder 1.1 times, the overlap
-    /// `gap` outside, jittered like [`crumpled`].
-    pub(super) fn wrapped(
-        k: usize,
-        size: f64,
-        seed: u64,
-        gap: f64,
-    ) -> (Vec<Point3>, Vec<[u32; 3]>) {
-        let mut rng = SplitMix(seed);
-        let jitter: Vec<f64> = (0..3 * k * k).map(|_| rng.next_f64() - 0.5).collect();
-        let r = size / (1.1 * std::f64::consts::TAU);
-        let e = size / (k - 1) as f64;
-        grid(k, k, 0, |i, j| {
-            let (u, v) = (i as f64 / (k - 1) as f64, j as f64 / (k - 1) as f64);
-            let turn = u * 1.1;
-            // Out by `gap` over the last tenth (where it overlaps the first).
-            let rr = r + gap * ((turn - 0.95) / 0.05).clamp(0.0, 1.0);
-            let a = turn * std::f64::consts::TAU;
-            let q = 3 * (i * k + j);
-            Point3::new(
-                rr * a.cos() + 0.5 * gap * jitter[q],
-                rr * a.sin() + 0.5 * gap * jitter[q + 1],
-                size * v + 0.3 * e * jitter[q + 2],
-            )
-        })
-    }
-
-    #[test]
-    #[ignore = "timing: cargo test --release timing_of_a_large_crumpled_cloth -- --ignored --nocapture"]
-    fn timing_of_a_large_crumpled_cloth() {
-        // 118 x 118 = 13,924 particles, 27,378 triangles on a 1 m square (8.5 mm edges), 3 mm
-        // thick. Dense: folded in five, layers 2 mm apart, every particle in contact. Resting:
-        // 3.2 mm apart (as a solver leaves them), contacts where the jitter brings layers
-        // together. Garment: one layer round a cylinder (a torso), overlapping itself by a tenth
-        // 3.2 mm out, jittered alike.
-        for scene in ["dense", "resting", "garment"] {
-            let (x0, t) = match scene {
-                "dense" => crumpled(118, 1.0, 1, 0.002),
-                "resting" => crumpled(118, 1.0, 1, 0.0032),
-                _ => wrapped(118, 1.0, 1, 0.0032),
-            };
-            let n = x0.len();
-            let th = vec![0.003; n];
-            let im = vec![1.0 / 2e-5; n];
-            let mut rng = SplitMix(2);
-            // The step: everything falls 1 mm, give or take 0.5 mm.
-            let x1: Vec<Point3> = x0
-                .iter()
-                .map(|p| p + Vec3::new(0.0, 0.0, -1e-3 + 1e-3 * (rng.next_f64() - 0.5)))
-                .collect();
-            let v1: Vec<Vec3> = (0..n).map(|_| Vec3::new(0.0, 0.0, -0.3)).collect();
-            let mut h = ClothHash::new(n, &t, &[]);
-            for threads in [1, 2] {
-                rayon::ThreadPoolBuilder::new()
-                    .num_threads(threads)
-                    .build()
-                    .unwrap()
-                    .install(|| {
-                        let mut best = (f64::INFINITY, f64::INFINITY, f64::INFINITY);
-                        let mut last = SelfStats::default();
-                        let mut crossing = 0;
-                        for _ in 0..10 {
-                            let (mut x, mut v) = (x1.clone(), v1.clone());
-                            last = step(&x0, &mut x, &mut v, SelfCloth::new(&t, &th, &im), &mut h);
-                            let c = Instant::now();
-                            let cell = h.cell();
-                            h.rebuild(&x, &t, cell, 0.0);
-                            let rb = c.elapsed().as_secs_f64();
-                            let c = Instant::now();
-                            crossing = self_crossing_edges(&x, &t, &h);
-                            best = (
-                                best.0.min(last.seconds),
-                                best.1.min(c.elapsed().as_secs_f64()),
-                                best.2.min(rb),
-                            );
-                        }
-                        println!(
-                            "{scene}, {threads} thread(s): {n} particles, {} triangles, cell {:.4} m: \
-                             resolve_self {:.2} ms ({:?}); rebuild (margin 0) {:.2} ms, \
-                             self_crossing_edges {:.2} ms ({crossing} edges)",
-                            t.len(),
-                            h.cell(),
-                            best.0 * 1e3,
-                            last,
-                            best.2 * 1e3,
-                            best.1 * 1e3,
-                        );
-                    });
-            }
-        }
     }
 }

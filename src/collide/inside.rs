@@ -84,7 +84,7 @@ pub fn inside(c: &Collider, p: &Point3) -> bool {
 
 /// The reference: whether the generalized winding number of `c` about `p` is above 1/2
 /// (O(faces) per point).
-pub(crate) fn inside_by_winding(c: &Collider, p: &Point3) -> bool {
+pub fn inside_by_winding(c: &Collider, p: &Point3) -> bool {
     c.bbox.contains(p, 0.0) && winding_number(c, p) > 0.5
 }
 

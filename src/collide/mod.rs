@@ -6,5 +6,6 @@ pub mod collider;
 pub mod contact;
 pub mod grid;
 pub mod inside;
+pub mod sheets;
 
 pub use collider::Collider;
