@@ -347,10 +347,11 @@ fn print_summary(r: &GarmentReport) {
         println!("  assumed: {a}");
     }
     println!(
-        "  sewing: {:.2} s simulated ({}), largest seam gap {:.2} mm",
+        "  sewing: {:.2} s simulated ({}), largest seam gap {:.2} mm, seams at {} m/h^2",
         r.sew.time,
         if r.sew.done { "closed" } else { "NOT closed" },
-        r.sew.seam_gap_max * 1e3
+        r.sew.seam_gap_max * 1e3,
+        r.sew.sew_weight
     );
     println!(
         "  drape: {:.2} s simulated ({}), {:.1}% still moving",

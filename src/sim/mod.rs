@@ -109,7 +109,8 @@ pub struct SelfContact {
     pub options: SelfCollisionOptions,
     /// The triangles' hash, with the seams welded.
     pub hash: ClothHash,
-    /// Totals over the steps run so far (`seconds` the wall time).
+    /// Totals over the steps run so far (`seconds` the wall time; `remaining` is the last
+    /// step's).
     pub totals: SelfStats,
 }
 
