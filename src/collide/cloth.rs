@@ -1049,23 +1049,30 @@ pub fn body_crossing_edges(collider: &Collider, x: &[Point3], triangles: &[[u32;
     body_crossing_edges_of(collider, x, &cloth_edges(triangles))
 }
 
-/// The number of `edges` (particle pairs) that properly cross a face of the body: each edge walks
-/// the cells of the collider's grid it passes, testing each face once.
+/// The number of `edges` (particle pairs) that properly cross a face of the body.
 pub fn body_crossing_edges_of(collider: &Collider, x: &[Point3], edges: &[[u32; 2]]) -> usize {
+    body_crossing_flags(collider, x, edges)
+        .into_iter()
+        .filter(|&c| c)
+        .count()
+}
+
+/// Per edge of `edges` (particle pairs), whether it properly crosses a face of the body: each
+/// edge walks the cells of the collider's grid it passes, testing each face once.
+pub fn body_crossing_flags(collider: &Collider, x: &[Point3], edges: &[[u32; 2]]) -> Vec<bool> {
     let m = collider.margin;
     map_chunks(edges.len(), |r| {
         let mut seen: Vec<u32> = Vec::new();
-        r.filter(|&e| {
+        r.map(|e| {
             let (p, q) = (x[edges[e][0] as usize], x[edges[e][1] as usize]);
             let (lo, hi) = (p.inf(&q), p.sup(&q));
             let outside = (0..3)
                 .any(|k| hi[k] < collider.bbox.min[k] - m || lo[k] > collider.bbox.max[k] + m);
             !outside && segment_crosses_body(collider, &p, &q, &mut seen)
         })
-        .count()
+        .collect::<Vec<bool>>()
     })
-    .into_iter()
-    .sum()
+    .concat()
 }
 
 /// Whether segment `pq` properly crosses a face of the collider, walking the grid cells it
@@ -1425,6 +1432,19 @@ struct Table<'a> {
     vlist: &'a [u32],
 }
 
+impl Work {
+    /// The vertex-to-push table, with the moved flags to write beside it (last iteration's,
+    /// any iteration's).
+    fn table(&mut self) -> (Table<'_>, &mut [bool], &mut [bool]) {
+        let table = Table {
+            push: &self.push,
+            vstart: &self.vstart,
+            vlist: &self.vlist,
+        };
+        (table, &mut self.moved_last, &mut self.moved_any)
+    }
+}
+
 impl Table<'_> {
     /// `Σ coef dir` and `Σ coef tan` over the pushes moving vertex `v`, in table order.
     #[inline]
@@ -1584,19 +1604,8 @@ pub fn resolve_self(
         for ps in &work.push {
             work.ever[ps.pair as usize] = true;
         }
-        let Work {
-            push,
-            vstart,
-            vlist,
-            moved_last,
-            moved_any,
-            ..
-        } = &mut work;
-        let table = Table {
-            push,
-            vstart,
-            vlist,
-        };
+        let (table, moved_last, moved_any) = work.table();
+        let vstart = table.vstart;
         par::for_chunks3(CHUNK, n, x, moved_last, moved_any, |base, xs, last, any| {
             for k in 0..xs.len() {
                 let v = base + k;
@@ -1628,18 +1637,8 @@ pub fn resolve_self(
         if active == 0 {
             break;
         }
-        let Work {
-            push,
-            vstart,
-            vlist,
-            moved_any,
-            ..
-        } = &mut work;
-        let table = Table {
-            push,
-            vstart,
-            vlist,
-        };
+        let (table, _, moved_any) = work.table();
+        let vstart = table.vstart;
         let friction = opts.friction > 0.0;
         par::for_chunks3(CHUNK, n, x, v, moved_any, |base, xs, vs, any| {
             for k in 0..xs.len() {

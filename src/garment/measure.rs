@@ -4,7 +4,7 @@
 use super::assemble::SeamPair;
 use crate::cloth::elements::SpringKind;
 use crate::collide::cloth::{
-    body_crossing_edges_of, mean_edge_length, self_crossings, ClothHash, AUTO_CELL,
+    body_crossing_flags, mean_edge_length, self_crossings, ClothHash, AUTO_CELL,
 };
 use crate::sim::World;
 use serde::Serialize;
@@ -133,10 +133,9 @@ fn crossing_edges(world: &World, seams: &[SeamPair]) -> (Vec<u32>, Vec<u32>) {
     hash.rebuild(x, &m.triangles, cell.max(1e-6), 0.0);
     let mut body = vec![0u32; m.len()];
     for c in &world.colliders {
-        for e in hash.edges() {
-            if body_crossing_edges_of(c, x, &[*e]) > 0 {
-                body[e[0] as usize] += 1;
-            }
+        let flags = body_crossing_flags(c, x, hash.edges());
+        for (e, _) in hash.edges().iter().zip(flags).filter(|(_, f)| *f) {
+            body[e[0] as usize] += 1;
         }
     }
     let mut cloth = vec![0u32; m.len()];
