@@ -290,6 +290,10 @@ fn lift(world: &mut World, seams: &[SeamPair], dt: f64) {
         .collect();
     let m = &mut world.model;
     m.external.clear();
+    if points.iter().all(Option::is_none) {
+        // No extra force: the step loop skips it.
+        return;
+    }
     m.external.resize(n, Vec3::zeros());
     // Per piece: the sum of its sides' displacements to their meeting points, and their count.
     let piece_of = |i: usize| {
