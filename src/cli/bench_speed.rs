@@ -54,6 +54,10 @@ pub struct SpeedBench {
     /// Projective dynamics: Chebyshev spectral radius (0 turns it off).
     #[arg(long)]
     pub chebyshev: Option<f64>,
+    /// Projective dynamics: particles of changed contact corrected by a low-rank update before
+    /// the matrix is refactored (0: refactor at every change).
+    #[arg(long)]
+    pub low_rank_max: Option<u32>,
     /// Friction between the cloth and the sphere.
     #[arg(long, default_value_t = 0.5)]
     pub friction: f64,
@@ -80,6 +84,7 @@ struct Row {
     collision_seconds: f64,
     factor_seconds: f64,
     factorisations: u64,
+    low_rank_columns: u64,
     inside: usize,
     max_strain: f64,
     min_clearance: f64,
@@ -176,6 +181,9 @@ fn settings(a: &SpeedBench) -> SolverSettings {
     if let Some(m) = a.anderson {
         s.anderson = m;
     }
+    if let Some(k) = a.low_rank_max {
+        s.low_rank_max = k;
+    }
     if let Some(n) = a.newton {
         s.newton_iterations = n;
     }
@@ -212,7 +220,7 @@ pub fn run(a: SpeedBench) -> anyhow::Result<()> {
             String::new()
         }
     ));
-    say("  particles  faces    wall s   solve s  collide s  factor s (count) | inside  max strain  min clearance mm".into());
+    say("  particles  faces    wall s   solve s  collide s  factor s (count, low-rank columns) | inside  max strain  min clearance mm".into());
     let mut rows = Vec::new();
     let mut faces_list = vec![5120];
     if !a.small_sphere_only {
@@ -246,12 +254,13 @@ pub fn run(a: SpeedBench) -> anyhow::Result<()> {
                 collision_seconds: st.collision_seconds,
                 factor_seconds: st.solver.factor_seconds,
                 factorisations: st.solver.factorisations,
+                low_rank_columns: st.solver.low_rank_columns,
                 inside,
                 max_strain,
                 min_clearance: clearance,
             };
             say(format!(
-                "  {:>9}  {:>6}  {:>8.3}  {:>8.3}  {:>9.3}  {:>8.3} ({:>5}) | {:>6}  {:>10.2e}  {:>8.3}",
+                "  {:>9}  {:>6}  {:>8.3}  {:>8.3}  {:>9.3}  {:>8.3} ({:>5}, {:>6}) | {:>6}  {:>10.2e}  {:>8.3}",
                 row.particles,
                 row.faces,
                 row.wall_seconds,
@@ -259,6 +268,7 @@ pub fn run(a: SpeedBench) -> anyhow::Result<()> {
                 row.collision_seconds,
                 row.factor_seconds,
                 row.factorisations,
+                row.low_rank_columns,
                 row.inside,
                 row.max_strain,
                 row.min_clearance * 1e3

@@ -90,6 +90,16 @@ impl Cholesky {
             .map_err(|_| NotPositiveDefinite)
     }
 
+    /// The number of unknowns.
+    pub fn len(&self) -> usize {
+        self.work.len()
+    }
+
+    /// Whether the matrix has no unknowns.
+    pub fn is_empty(&self) -> bool {
+        self.work.is_empty()
+    }
+
     /// Solves `A x = b` in place for the three columns of `b`'s rows.
     pub fn solve(&mut self, b: &mut [[f64; 3]]) {
         let perm = self.symbolic.perm().map(|p| p.arrays());

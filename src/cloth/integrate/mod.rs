@@ -29,6 +29,7 @@ pub mod cholesky;
 pub mod direct;
 pub mod explicit;
 pub mod implicit;
+pub mod lowrank;
 pub mod projective;
 
 use super::model::ClothModel;
@@ -182,6 +183,11 @@ pub struct SolverSettings {
     /// default [`ANDERSON_DEPTH`]), each accelerated iterate kept only if it lowers the step's
     /// objective.
     pub anderson: u32,
+    /// Projective dynamics: while at most this many particles have a contact weight the
+    /// factored matrix lacks (or no longer has), the solves are corrected exactly by a
+    /// low-rank update instead of refactoring (default [`projective::LOW_RANK_MAX`]; 0:
+    /// refactor at every change). Speed only: the iterates are the same to rounding.
+    pub low_rank_max: u32,
 }
 
 /// The default history of Anderson acceleration.
@@ -207,6 +213,7 @@ impl SolverSettings {
             chebyshev: None,
             strain_band: None,
             anderson: ANDERSON_DEPTH,
+            low_rank_max: projective::LOW_RANK_MAX,
         }
     }
 
@@ -255,6 +262,9 @@ pub struct SolveStats {
     pub factor_seconds: f64,
     /// Numeric factorisations.
     pub factorisations: u64,
+    /// Columns solved for low-rank corrections instead of refactoring (projective dynamics:
+    /// particles coming into or leaving contact), each a third of a solve.
+    pub low_rank_columns: u64,
     /// Conjugate-gradient iterations (implicit Euler).
     pub cg_iterations: u64,
     /// Local/global iterations (projective dynamics).
