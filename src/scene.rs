@@ -6,7 +6,8 @@
 //! [solver]
 //! integrator = "projective-dynamics" # (default) or "implicit-euler", "leapfrog",
 //!                                  # "explicit-euler"
-//! dt = 0.01                        # s (default: the integrator's, `Integrator::default_dt`)
+//! dt = 0.01                        # s (default: 0.01 s for the implicit integrators; for the
+//!                                  # explicit ones, 0.9 of the cloth's stability estimate)
 //! newton_iterations = 1            # implicit Euler: Newton steps per step (1: Baraff-Witkin)
 //! cg_tolerance = 1e-6              # implicit Euler: relative residual of conjugate gradients
 //! cg_max_iterations = 1000         # implicit Euler
@@ -302,6 +303,11 @@ pub struct Scene {
     pub solver: SolverSettings,
     /// When to stop.
     pub stop: Stop,
+    /// The file's `solver.duration`, s (the steps are recounted when the step is chosen later).
+    pub duration: Option<f64>,
+    /// The file gives no `dt` for an explicit integrator: the step is chosen from the cloth's
+    /// stability estimate once it is built ([`Scene::choose_step`]).
+    pub step_from_estimate: bool,
     /// Grid cells.
     pub cells: Cells,
     /// Objects.
@@ -314,6 +320,46 @@ pub struct Scene {
     pub frames: Option<u64>,
     /// Cusick disc radius, m.
     pub disc_radius: Option<f64>,
+}
+
+/// The fraction of the cloth's stability estimate (conservative: Gershgorin's bound on the
+/// highest frequency) an explicit integrator steps at when the scene gives no `dt`.
+pub const EXPLICIT_STEP_FRACTION: f64 = 0.9;
+
+/// The most steps a scene without `dt` may be given by [`Scene::choose_step`]; beyond, the
+/// integrator is the wrong one for the fabric and the spacing.
+pub const MAX_CHOSEN_STEPS: u64 = 50_000_000;
+
+impl Scene {
+    /// For a scene without `dt` and an explicit integrator, the step: [`EXPLICIT_STEP_FRACTION`]
+    /// of the cloth's stable-step estimate `stable_step` (s), the steps of a `duration`
+    /// recounted. A no-op when the file gives `dt` or the integrator is implicit. An error
+    /// (naming `solver.dt`) when the run would take more than [`MAX_CHOSEN_STEPS`] steps.
+    pub fn choose_step(&mut self, stable_step: f64) -> Result<(), SceneError> {
+        if !self.step_from_estimate {
+            return Ok(());
+        }
+        let dt = EXPLICIT_STEP_FRACTION * stable_step;
+        let steps = match self.duration {
+            Some(t) => (t / dt).round().max(1.0),
+            None => self.stop.max_steps() as f64,
+        };
+        if !(dt > 0.0 && dt.is_finite()) || steps > MAX_CHOSEN_STEPS as f64 {
+            return Err(SceneError::Key {
+                path: self.path.clone(),
+                key: "solver.dt".into(),
+                message: format!(
+                    "not given, and {} is stable for this cloth only below {:.3e} s: {:.3e} steps for the run (at most {MAX_CHOSEN_STEPS}). Use the default integrator (projective dynamics), or give dt",
+                    self.solver.integrator, stable_step, steps
+                ),
+            });
+        }
+        self.solver.dt = dt;
+        if self.duration.is_some() {
+            self.stop = Stop::Steps(steps as u64);
+        }
+        Ok(())
+    }
 }
 
 /// Reads and validates a scene file (meshes are checked to exist, not read). Every problem of
@@ -708,6 +754,8 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
             path: path.to_path_buf(),
             units,
             gravity,
+            step_from_estimate: f.solver.dt.is_none() && solver.integrator.is_explicit(),
+            duration: f.solver.duration,
             solver,
             stop,
             cells,

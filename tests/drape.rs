@@ -1110,3 +1110,59 @@ fn implicit_results_are_identical_with_one_or_two_threads() {
         assert_eq!(one.state.v, two.state.v, "{integrator}");
     }
 }
+
+#[test]
+fn an_explicit_scene_without_dt_steps_just_under_its_stability_estimate() {
+    // Real cotton at 5 mm: leapfrog is stable below about 9.5e-6 s there, so a fixed default of
+    // 1e-5 s would blow up. Without `dt` the step is chosen from the cloth's estimate.
+    let tmp = scratch("nodt");
+    let dir = tmp.path();
+    let scene = ribbon_variant(
+        dir,
+        &[
+            ("dt = 2e-4\n", ""),
+            ("spacing = 0.01", "spacing = 0.005"),
+            ("fabric = \"knit\"", "fabric = \"cotton\""),
+            (RIBBON_STOP, "duration = 0.01"),
+        ],
+        "",
+    );
+    let out = dir.join("out");
+    let report = dir.join("r.json");
+    let o = drape_cli(&scene, &out, &["--report", report.to_str().unwrap()]);
+    let (stdout, err) = common::text(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(stdout.contains("no dt in the scene"), "{stdout}");
+    let r: Value = serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    let (dt, estimate) = (
+        r["dt"].as_f64().unwrap(),
+        r["stable_step_estimate"].as_f64().unwrap(),
+    );
+    assert!(r["dt_from_estimate"].as_bool().unwrap());
+    assert!((dt / estimate - drapekit::scene::EXPLICIT_STEP_FRACTION).abs() < 1e-12);
+    assert!(dt < 1e-5, "{dt}");
+    assert_eq!(r["steps"].as_u64().unwrap(), (0.01 / dt).round() as u64);
+    // Explicit Euler's estimate for the same cloth asks for billions of steps: refused before
+    // the run, naming the key.
+    let euler = ribbon_variant(
+        dir,
+        &[
+            ("dt = 2e-4\n", ""),
+            (
+                "integrator = \"leapfrog\"",
+                "integrator = \"explicit-euler\"",
+            ),
+            ("fabric = \"knit\"", "fabric = \"cotton\""),
+            (RIBBON_STOP, "duration = 1.0"),
+        ],
+        "",
+    );
+    let o = drape_cli(&euler, &dir.join("out2"), &[]);
+    let (_, err) = common::text(&o);
+    assert!(!o.status.success());
+    assert!(
+        err.contains("solver.dt") && err.contains("explicit-euler"),
+        "{err}"
+    );
+    assert!(!dir.join("out2").exists());
+}

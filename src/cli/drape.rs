@@ -109,6 +109,9 @@ pub struct DrapeReport {
     pub integrator: crate::cloth::Integrator,
     /// Time step, s.
     pub dt: f64,
+    /// The scene gave no `dt` for an explicit integrator: `dt` is
+    /// `scene::EXPLICIT_STEP_FRACTION` of `stable_step_estimate`.
+    pub dt_from_estimate: bool,
     /// Steps taken.
     pub steps: u64,
     /// Simulated time, s.
@@ -163,8 +166,9 @@ fn piece_mesh(world: &World, piece: usize, to_units: f64) -> TriMesh {
 /// Runs `drapekit drape`.
 pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
     let start = std::time::Instant::now();
-    let sc = scene::read(&args.scene)?;
+    let mut sc = scene::read(&args.scene)?;
     let mut world = sim::load(&sc)?;
+    sc.choose_step(world.stable_step)?;
     let out = &args.output;
     if out.is_file() {
         anyhow::bail!(
@@ -306,6 +310,7 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
         solver: sc.solver,
         integrator: sc.solver.integrator,
         dt: sc.solver.dt,
+        dt_from_estimate: sc.step_from_estimate,
         steps: stats.steps,
         time: stats.time,
         at_rest: stats.at_rest,
@@ -351,14 +356,26 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
 
 fn print_summary(r: &DrapeReport) {
     println!(
-        "{} -> {}: {} particles, {} springs, {} object faces; {} steps of {} s ({}, {:.3} s simulated{})",
+        "{} -> {}: {} particles, {} springs, {} object faces; {} steps of {} s{} ({}, {:.3} s simulated{})",
         r.scene,
         r.output_dir,
         r.particles,
         r.springs,
         r.object_faces,
         r.steps,
-        r.dt,
+        if r.dt_from_estimate {
+            format!("{:.3e}", r.dt)
+        } else {
+            r.dt.to_string()
+        },
+        if r.dt_from_estimate {
+            format!(
+                " (no dt in the scene: {} of the stability estimate)",
+                crate::scene::EXPLICIT_STEP_FRACTION
+            )
+        } else {
+            String::new()
+        },
         r.integrator,
         r.time,
         if r.at_rest { ", came to rest" } else { "" }
