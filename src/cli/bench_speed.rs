@@ -241,7 +241,7 @@ pub fn run(a: SpeedBench) -> anyhow::Result<()> {
                 // of its time), and prints the trace if asked.
                 let half = stop.max_steps() / 2;
                 let mut record = |step: u64, w: &World| {
-                    if a.trace.is_some_and(|k| step % k == 0) {
+                    if a.trace.is_some_and(|k| step.is_multiple_of(k)) {
                         trace(step, w)?;
                     }
                     if step > half {
