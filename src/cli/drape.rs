@@ -74,10 +74,13 @@ pub struct Phases {
     pub collision_seconds: f64,
     /// Measure (energy watch, rest test), s.
     pub measure_seconds: f64,
-    /// Factoring the projective-dynamics matrix, s.
+    /// Factoring the projective-dynamics matrix and its low-rank updates, s.
     pub factor_seconds: f64,
-    /// Numeric factorisations (projective dynamics refactors when the contacts change).
+    /// Numeric factorisations (projective dynamics refactors when more than `low_rank_max`
+    /// particles' contacts changed).
     pub factorisations: u64,
+    /// Columns solved for low-rank updates instead of refactoring (each a third of a solve).
+    pub low_rank_columns: u64,
     /// Conjugate-gradient iterations (implicit Euler).
     pub cg_iterations: u64,
     /// Local/global iterations (projective dynamics).
@@ -323,6 +326,7 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
             measure_seconds: stats.measure_seconds,
             factor_seconds: stats.solver.factor_seconds,
             factorisations: stats.solver.factorisations,
+            low_rank_columns: stats.solver.low_rank_columns,
             cg_iterations: stats.solver.cg_iterations,
             pd_iterations: stats.solver.pd_iterations,
         },
