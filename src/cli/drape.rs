@@ -358,28 +358,29 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
     )
 }
 
+/// The step for the summary: as the scene gave it, or chosen from the estimate (and said so).
+fn step_text(r: &DrapeReport) -> String {
+    if r.dt_from_estimate {
+        format!(
+            "{:.3e} s (no dt in the scene: {} of the stability estimate)",
+            r.dt,
+            crate::scene::EXPLICIT_STEP_FRACTION
+        )
+    } else {
+        format!("{} s", r.dt)
+    }
+}
+
 fn print_summary(r: &DrapeReport) {
     println!(
-        "{} -> {}: {} particles, {} springs, {} object faces; {} steps of {} s{} ({}, {:.3} s simulated{})",
+        "{} -> {}: {} particles, {} springs, {} object faces; {} steps of {} ({}, {:.3} s simulated{})",
         r.scene,
         r.output_dir,
         r.particles,
         r.springs,
         r.object_faces,
         r.steps,
-        if r.dt_from_estimate {
-            format!("{:.3e}", r.dt)
-        } else {
-            r.dt.to_string()
-        },
-        if r.dt_from_estimate {
-            format!(
-                " (no dt in the scene: {} of the stability estimate)",
-                crate::scene::EXPLICIT_STEP_FRACTION
-            )
-        } else {
-            String::new()
-        },
+        step_text(r),
         r.integrator,
         r.time,
         if r.at_rest { ", came to rest" } else { "" }

@@ -29,7 +29,7 @@
 //! ```
 
 use super::cholesky::Cholesky;
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, DVector, DVectorView};
 
 /// The changed diagonal entries of a factored matrix and what the correction needs.
 #[derive(Default)]
@@ -146,30 +146,14 @@ impl DiagonalUpdate {
                 (0..3).for_each(|a| y[a][l] += c * z[u][a]);
             }
         }
+        let y = y.map(DVector::from_vec);
         for (zr, a) in z.iter_mut().zip(self.z.chunks_exact(k)) {
+            let a = DVectorView::from_slice(a, k);
             for c in 0..3 {
-                zr[c] -= dot(a, &y[c]);
+                zr[c] -= a.dot(&y[c]);
             }
         }
     }
-}
-
-/// `a . b` in four interleaved sums (the compiler vectorises them).
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    let mut s = [0.0; 4];
-    let (ac, bc) = (a.chunks_exact(4), b.chunks_exact(4));
-    let tail: f64 = ac
-        .remainder()
-        .iter()
-        .zip(bc.remainder())
-        .map(|(x, y)| x * y)
-        .sum();
-    for (x, y) in ac.zip(bc) {
-        for i in 0..4 {
-            s[i] += x[i] * y[i];
-        }
-    }
-    (s[0] + s[1]) + (s[2] + s[3]) + tail
 }
 
 #[cfg(test)]

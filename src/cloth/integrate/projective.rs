@@ -225,9 +225,7 @@ impl ProjectiveDynamics {
         if changes.len() > self.settings.low_rank_max as usize {
             self.factor();
         } else {
-            let before = self.update.columns_solved;
             self.update.set(chol, &changes);
-            self.stats.low_rank_columns += self.update.columns_solved - before;
         }
         self.stats.factor_seconds += t.elapsed().as_secs_f64();
     }
@@ -571,6 +569,9 @@ impl Solver for ProjectiveDynamics {
     }
 
     fn stats(&self) -> SolveStats {
-        self.stats
+        SolveStats {
+            low_rank_columns: self.update.columns_solved,
+            ..self.stats
+        }
     }
 }
