@@ -135,6 +135,17 @@ fn near(c: &Collider, p0: &Point3, p1: &Point3, m: f64) -> bool {
     (0..3).all(|k| hi[k] >= c.bbox.min[k] - m && lo[k] <= c.bbox.max[k] + m)
 }
 
+/// A face around `f` (its ring) behind whose plane `p` lies (on side `side`) and over which
+/// it projects: where a particle that passed through `f` near its edge is pushed out along a
+/// normal instead of back along its path (which would undo its whole slide of the step).
+fn beside(c: &Collider, f: usize, side: f64, p: &Point3) -> Option<usize> {
+    c.ring(f).iter().map(|&g| g as usize).find(|&g| {
+        let (n, off) = c.plane(g);
+        let d = p.coords.dot(&n) - off;
+        side * d < 0.0 && inside_face(c, g, &(p - n * d))
+    })
+}
+
 /// Collision of one particle with all objects after a step: `p0` its previous position, `p1` and
 /// `v` its new position and velocity (corrected in place), `contact` its sliding state. Objects
 /// whose `reachable` flag is false are skipped. Returns whether it touches an object.
@@ -242,16 +253,21 @@ pub fn resolve(
             let f = h.face as usize;
             let (n, off) = c.plane(f);
             let q1 = *p1 - n * (p1.coords.dot(&n) - off);
-            *p1 = if inside_face(c, f, &q1) {
-                q1 + n * (h.side * th)
+            let (q, face) = if inside_face(c, f, &q1) {
+                (q1 + n * (h.side * th), f)
+            } else if let Some(g) = beside(c, f, h.side, p1) {
+                // Out over a face around: pushed out of it along its normal.
+                let (ng, og) = c.plane(g);
+                (*p1 - ng * (p1.coords.dot(&ng) - og) + ng * (h.side * th), g)
             } else {
                 let r = p0 + (*p1 - p0) * h.t;
-                r - n * (r.coords.dot(&n) - off) + n * (h.side * th)
+                (r - n * (r.coords.dot(&n) - off) + n * (h.side * th), f)
             };
-            stop_into(v, &(n * h.side));
+            *p1 = q;
+            stop_into(v, &(c.plane(face).0 * h.side));
             *contact = Some(Contact {
                 object: h.object as u32,
-                face: h.face,
+                face: face as u32,
                 side: h.side,
             });
             touched = true;
@@ -332,6 +348,31 @@ mod tests {
         ];
         let m = crate::mesh::TriMesh::new(p, vec![[0, 1, 2], [2, 3, 0]]);
         Collider::new("floor".into(), m, [4, 4, 1], 0.01, None)
+    }
+
+    #[test]
+    fn a_particle_through_a_face_near_its_edge_is_pushed_out_of_the_next_face() {
+        // The step crosses face 0 (x > y) and ends under face 1: it is pushed out along face
+        // 1's normal where it ended, not put back where it crossed (that undid its slide).
+        let objects = [unit_square()];
+        let (p0, mut p, mut v) = (
+            Point3::new(0.5, 0.1, 0.02),
+            Point3::new(0.1, 0.5, -0.5),
+            Vec3::new(-4.0, 4.0, -52.0),
+        );
+        let mut contact = None;
+        assert!(resolve(
+            &objects,
+            &[true],
+            &p0,
+            &mut p,
+            &mut v,
+            0.01,
+            &mut contact
+        ));
+        assert!((p - Point3::new(0.1, 0.5, 0.01)).norm() < 1e-12, "{p}");
+        assert_eq!(contact.map(|c| c.face), Some(1));
+        assert_eq!(v, Vec3::new(-4.0, 4.0, 0.0));
     }
 
     #[test]
