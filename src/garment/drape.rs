@@ -9,7 +9,8 @@
 //! body (a shoulder seam) has its sides pulled over it instead, towards a meeting point
 //! outside the body, with their pieces following as a whole (`lift`, [`LIFT_WEIGHT`],
 //! [`PIECE_LIFT_WEIGHT`]). When the widest or the mean seam gap closes by less than a tenth
-//! over ten checks, the seams pull twice as hard (up to [`SEW_WEIGHT_MAX`]): the gaps are
+//! over ten checks, or so slowly that at that rate the widest would still be open at
+//! `sew_max`, the seams pull twice as hard (up to [`SEW_WEIGHT_MAX`]): the gaps are
 //! small by then, and a strong pull over a small gap moves the rows little. Stage 1 ends when
 //! every seam gap is at most `seam_closed`, when the gaps close that slowly at the strongest
 //! pull, or at `sew_max`.
@@ -252,11 +253,19 @@ pub fn sew(
         // checks. The seams pull harder (the gaps are smaller now: the rows along them no
         // longer run ahead of the cloth), up to SEW_WEIGHT_MAX; slow at the most, sewing has
         // stalled.
+        // Also slow: at the widest gap's rate over those checks it would not close before
+        // `sew_max` (a gap shrinking steadily but too slowly, by 11% per ten checks, say).
         let k = history.len();
         let slow = |now: f64, then: f64| now > (1.0 - SLOW) * then;
+        let late = |now: f64, then: f64| {
+            let left = settings.sew_max - report.time;
+            let checks = STALL as f64 * (settings.seam_closed / now).ln() / (now / then).ln();
+            now > settings.seam_closed && checks * settings.check_every > left
+        };
         if k > STALL
             && (slow(history[k - 1].0, history[k - 1 - STALL].0)
-                || slow(history[k - 1].1, history[k - 1 - STALL].1))
+                || slow(history[k - 1].1, history[k - 1 - STALL].1)
+                || late(history[k - 1].0, history[k - 1 - STALL].0))
         {
             if weight >= SEW_WEIGHT_MAX {
                 break;
