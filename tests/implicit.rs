@@ -254,6 +254,28 @@ fn low_rank_contact_updates_give_the_refactored_answer() {
     assert!(apart < 1e-6, "the two runs end {apart} m apart");
 }
 
+/// The largest strain of `w` after step `from`, over `steps` steps with `settings`.
+fn worst_strain_after(w: &mut World, settings: &SolverSettings, from: u64, steps: u64) -> f64 {
+    let mut worst: f64 = 0.0;
+    let mut record = |step: u64, w: &World| {
+        if step > from {
+            worst = worst.max(sim::strain(&w.model, &w.state.x).0);
+        }
+        Ok(())
+    };
+    sim::run(
+        w,
+        settings,
+        Stop::Steps(steps),
+        Some(1),
+        &mut record,
+        &|_| {},
+    )
+    .unwrap();
+    assert!(w.state.contact.iter().filter(|c| c.is_some()).count() > 100);
+    worst
+}
+
 #[test]
 fn real_cotton_lying_on_a_sphere_stretches_less_than_one_percent_with_five_iterations() {
     // Issue 7's bar: real cotton on a sphere, at most 1% stretch. A 60 cm square at 1 cm lands
@@ -266,23 +288,7 @@ fn real_cotton_lying_on_a_sphere_stretches_less_than_one_percent_with_five_itera
         iterations: 5,
         ..SolverSettings::default()
     };
-    let mut worst: f64 = 0.0;
-    let mut record = |step: u64, w: &World| {
-        if step > 30 {
-            worst = worst.max(sim::strain(&w.model, &w.state.x).0);
-        }
-        Ok(())
-    };
-    sim::run(
-        &mut w,
-        &settings,
-        Stop::Steps(60),
-        Some(1),
-        &mut record,
-        &|_| {},
-    )
-    .unwrap();
-    assert!(w.state.contact.iter().filter(|c| c.is_some()).count() > 100);
+    let worst = worst_strain_after(&mut w, &settings, 30, 60);
     assert!(worst < 0.01, "largest strain after landing {worst}");
 }
 
@@ -419,22 +425,6 @@ fn a_finer_real_cotton_lying_on_a_sphere_stretches_less_than_one_percent_with_fi
         anderson: 0,
         ..SolverSettings::default()
     };
-    let mut worst: f64 = 0.0;
-    let mut record = |step: u64, w: &World| {
-        if step > 40 {
-            worst = worst.max(sim::strain(&w.model, &w.state.x).0);
-        }
-        Ok(())
-    };
-    sim::run(
-        &mut w,
-        &settings,
-        Stop::Steps(80),
-        Some(1),
-        &mut record,
-        &|_| {},
-    )
-    .unwrap();
-    assert!(w.state.contact.iter().filter(|c| c.is_some()).count() > 100);
+    let worst = worst_strain_after(&mut w, &settings, 40, 80);
     assert!(worst < 0.01, "largest strain after landing {worst}");
 }
