@@ -316,6 +316,11 @@ pub fn resolve(
                     *p1 = q + dir * th;
                     stop_into(v, &dir);
                     if interior || contact.is_none() {
+                        // Pushed away from an edge of a closed (outward) object, the particle is
+                        // outside it whatever side of this face's plane it is on (beside a
+                        // square rim it is behind the plane of the face below): a contact on
+                        // the inner side would hold it inside the next face round the rim.
+                        let side = if interior || !c.closed { side } else { 1.0 };
                         *contact = Some(Contact {
                             object: oi as u32,
                             face: f as u32,
@@ -373,6 +378,26 @@ mod tests {
         assert!((p - Point3::new(0.1, 0.5, 0.01)).norm() < 1e-12, "{p}");
         assert_eq!(contact.map(|c| c.face), Some(1));
         assert_eq!(v, Vec3::new(-4.0, 4.0, 0.0));
+    }
+
+    #[test]
+    fn a_particle_beside_a_closed_objects_corner_is_in_contact_from_outside() {
+        // 3 mm outside each face at a cube's bottom corner, behind the bottom face's plane's
+        // far side: pushed away from the corner, and in contact from the outside (side +1). On
+        // the inner side, the next step held it inside the face round the rim (the Cusick
+        // disc's skirt ended inside the disc).
+        let c = Collider::new("cube".into(), generate::cube(1.0), [2, 2, 2], 0.01, None);
+        assert!(c.closed);
+        let objects = [c];
+        for corner in [[1.0, 1.0, -1.0], [-1.0, 1.0, 1.0], [1.0, -1.0, 1.0]] {
+            let q = Vec3::from(corner) * 0.503;
+            let q = Point3::from(q - Vec3::z() * (0.006 * corner[2]));
+            let (mut p, mut v, mut contact) = (q, Vec3::zeros(), None);
+            resolve(&objects, &[true], &q, &mut p, &mut v, 0.01, &mut contact);
+            let ct = contact.expect("in contact");
+            assert_eq!(ct.side, 1.0, "corner {corner:?}: face {}", ct.face);
+            assert!(!crate::collide::inside::inside(&objects[0], &p), "{p}");
+        }
     }
 
     #[test]
