@@ -135,9 +135,11 @@ fn real_cotton_drapes_on_the_sphere_with_the_default_solver() {
     let th = sc.pieces[0].fabric.thickness;
     let clearance = sim::min_clearance(&w)[0];
     assert!(clearance > th - 1e-6, "{clearance}");
-    // The centre of the square rests on the top of the sphere.
-    let top = nearest(&w.state.x, &Point3::new(0.0, 0.0, 1.0));
-    assert!((w.state.x[top].coords.norm() - (0.3 + th)).abs() < 2e-3);
+    // The centre of the square (the particle that started above the sphere's top) rests on
+    // the top; the highest particle may be a fold standing beside it.
+    let start = sim::load(&sc).expect("the scene loads").state.x;
+    let centre = nearest(&start, &Point3::new(0.0, 0.0, 0.33));
+    assert!((w.state.x[centre].coords.norm() - (0.3 + th)).abs() < 2e-3);
     assert!(w.state.contact.iter().any(|c| c.is_some()));
     // Cotton hardly stretches under its own weight: the thread springs stay within 1%.
     let (max, mean) = sim::strain(&w.model, &w.state.x);

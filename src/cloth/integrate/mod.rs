@@ -173,7 +173,7 @@ pub struct SolverSettings {
     /// Implicit Euler: at most this many conjugate-gradient iterations per Newton step (default
     /// 1000).
     pub cg_max_iterations: u32,
-    /// Projective dynamics: local/global iterations per step (default 10).
+    /// Projective dynamics: local/global iterations per step (default 5).
     pub iterations: u32,
     /// Projective dynamics: Chebyshev acceleration (Wang 2015) with this spectral radius
     /// estimate in (0, 1); `None` (default): plain iterations. Ignored with `anderson`.
@@ -211,7 +211,7 @@ impl SolverSettings {
             linear_solver: LinearSolver::Cholesky,
             cg_tolerance: 1e-6,
             cg_max_iterations: 1000,
-            iterations: 10,
+            iterations: 5,
             chebyshev: None,
             strain_band: None,
             anderson: ANDERSON_DEPTH,
