@@ -405,6 +405,8 @@ fn implicit_euler_drapes_real_cotton_on_a_sphere_with_friction_without_blowing_u
     let settings = SolverSettings::new(Integrator::ImplicitEuler);
     let st = sim::run_quiet(&mut w, &settings, Stop::Steps(60));
     assert!(st.is_ok(), "{:?}", st.err());
+    // One factorisation of the direct solver per (single) Newton step, counted in the report.
+    assert_eq!(st.unwrap().solver.factorisations, 60);
     let on = w.state.contact.iter().filter(|c| c.is_some()).count();
     assert!(on > 100, "{on} particles on the sphere");
     let (max, _) = sim::strain(&w.model, &w.state.x);

@@ -74,10 +74,11 @@ pub struct Phases {
     pub collision_seconds: f64,
     /// Measure (energy watch, rest test), s.
     pub measure_seconds: f64,
-    /// Factoring the projective-dynamics matrix and its low-rank updates, s.
+    /// Factoring the projective-dynamics matrix and its low-rank updates, s (implicit Euler with
+    /// the direct solver: its factorisations and solves, one per Newton step).
     pub factor_seconds: f64,
     /// Numeric factorisations (projective dynamics refactors when more than `low_rank_max`
-    /// particles' contacts changed).
+    /// particles' contacts changed; implicit Euler's direct solver once per Newton step).
     pub factorisations: u64,
     /// Columns solved for low-rank updates instead of refactoring (each a third of a solve).
     pub low_rank_columns: u64,

@@ -257,6 +257,7 @@ impl Solver for ImplicitEuler {
                         *d = f.apply(*d);
                     }
                     self.stats.factor_seconds += t.elapsed().as_secs_f64();
+                    self.stats.factorisations += 1;
                     cg::CgResult {
                         iterations: 0,
                         converged: true,
