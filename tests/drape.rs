@@ -38,6 +38,21 @@ fn nearest(x: &[Point3], p: &Point3) -> usize {
         .unwrap()
 }
 
+/// Runs `drapekit drape SCENE -o OUT --report DIR/r.json`, which must succeed: its standard
+/// output and the report.
+fn drape_with_report(
+    scene: &std::path::Path,
+    out: &std::path::Path,
+    dir: &std::path::Path,
+) -> (String, Value) {
+    let report = dir.join("r.json");
+    let o = drape_cli(scene, out, &["--report", report.to_str().unwrap()]);
+    let (stdout, err) = common::text(&o);
+    assert!(o.status.success(), "{err}");
+    let r = serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    (stdout, r)
+}
+
 /// Runs `drapekit drape SCENE -o OUT` with `extra` arguments.
 fn drape_cli(
     scene: &std::path::Path,
@@ -713,10 +728,7 @@ fn drape_writes_pieces_frames_and_a_report_of_finite_numbers() {
         "\n[output]\nframes = 250\nply = true\n",
     );
     let out = dir.join("out");
-    let report = dir.join("r.json");
-    let o = drape_cli(&scene, &out, &["--report", report.to_str().unwrap()]);
-    let (stdout, err) = common::text(&o);
-    assert!(o.status.success(), "{err}");
+    let (stdout, r) = drape_with_report(&scene, &out, dir);
     assert!(
         stdout.contains("particles") && stdout.contains("strain"),
         "{stdout}"
@@ -734,7 +746,6 @@ fn drape_writes_pieces_frames_and_a_report_of_finite_numbers() {
             "ribbon_0001000.obj"
         ]
     );
-    let r: Value = serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
     for key in [
         "particles",
         "springs",
@@ -1130,12 +1141,8 @@ fn an_explicit_scene_without_dt_steps_just_under_its_stability_estimate() {
         "",
     );
     let out = dir.join("out");
-    let report = dir.join("r.json");
-    let o = drape_cli(&scene, &out, &["--report", report.to_str().unwrap()]);
-    let (stdout, err) = common::text(&o);
-    assert!(o.status.success(), "{err}");
+    let (stdout, r) = drape_with_report(&scene, &out, dir);
     assert!(stdout.contains("no dt in the scene"), "{stdout}");
-    let r: Value = serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
     let (dt, estimate) = (
         r["dt"].as_f64().unwrap(),
         r["stable_step_estimate"].as_f64().unwrap(),
