@@ -35,7 +35,7 @@ fn load(name: &str) -> Option<(TriMesh, PrepareReport, Collider)> {
         .mesh;
     let mut mesh = read.clone();
     let report = prepare(&mut mesh, &PrepareOptions::default());
-    let dims = Collider::auto_dims(&mesh, 0.0);
+    let dims = Collider::auto_dims(&mesh);
     let c = Collider::new(name.into(), mesh, dims, 0.002, None);
     Some((read, report, c))
 }

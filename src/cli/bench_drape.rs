@@ -242,15 +242,8 @@ pub fn run(a: DrapeBench) -> anyhow::Result<()> {
     say("  cells           collision s   total s   | paper collision s   total s   | contacts at the end".into());
     let mut rows = Vec::new();
     let mut finals: Vec<Vec<Point3>> = Vec::new();
-    // The paper's grids, then the `auto` rule's (as `sim::load` picks it: travel per step from
-    // a fall of the scene's height).
-    let auto = {
-        let (w, dt) = bench_world(&torso, [1, 1, 1]);
-        let cloth = crate::math::Aabb::of_points(&w.state.x).expect("a cloth");
-        let b = torso.bbox().expect("a torso");
-        let speed = (2.0 * 9.81 * (cloth.max.z.max(b.max.z) - cloth.min.z.min(b.min.z))).sqrt();
-        Collider::auto_dims(&torso, speed * dt)
-    };
+    // The paper's grids, then the `auto` rule's.
+    let auto = Collider::auto_dims(&torso);
     let grids = PAPER
         .iter()
         .map(|&(c, pc, pt)| (c, Some((pc, pt))))

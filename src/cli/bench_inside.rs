@@ -33,7 +33,7 @@ pub struct InsideBench {
 pub fn run(args: InsideBench) -> anyhow::Result<()> {
     let mut mesh = read_mesh(&args.body, &ReadOptions::default())?.mesh;
     prepare(&mut mesh, &PrepareOptions::default());
-    let dims = Collider::auto_dims(&mesh, 0.0);
+    let dims = Collider::auto_dims(&mesh);
     let c = Collider::new("body".into(), mesh, dims, 0.0, None);
     ensure!(c.closed, "{}: the body is not closed", args.body.display());
     let mut rng = SplitMix(2024);

@@ -124,8 +124,7 @@ fn world(side: usize, mesh: &TriMesh, settings: &SolverSettings, friction: f64) 
         &[("square".into(), piece, fabric.clone(), placed)],
         Vec3::new(0.0, 0.0, -9.81),
     );
-    let speed = (2.0 * 9.81 * 0.8f64).sqrt();
-    let dims = Collider::auto_dims(mesh, speed * settings.dt);
+    let dims = Collider::auto_dims(mesh);
     let c = Collider::new(
         "sphere".into(),
         mesh.clone(),

@@ -186,10 +186,7 @@ pub fn garment_world(
     model.add_springs(&seam_springs(&assembled));
     model.add_bends(&assembled.seam_bends);
     let fabric = &settings.assemble.fabric;
-    // Cells sized for what a particle travels in a step while it falls a body's height.
-    let height = body.bbox().map_or(1.0, |b| b.diagonal());
-    let travel = (2.0 * GRAVITY.norm() * height).sqrt() * settings.solver.dt;
-    let dims = Collider::auto_dims(&body, travel);
+    let dims = Collider::auto_dims(&body);
     let clearance = settings
         .body_clearance
         .unwrap_or(AUTO_CLEARANCE * settings.assemble.spacing);

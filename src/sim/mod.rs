@@ -219,7 +219,6 @@ pub fn load(scene: &Scene) -> Result<World, SceneError> {
         .iter()
         .map(|p| p.fabric.thickness)
         .fold(0.0, f64::max);
-    let cloth_box = Aabb::of_points(&x).expect("pieces have particles");
     let colliders = scene
         .objects
         .iter()
@@ -227,12 +226,7 @@ pub fn load(scene: &Scene) -> Result<World, SceneError> {
         .map(|(o, mesh)| {
             let dims = match scene.cells {
                 Cells::Fixed(d) => d,
-                Cells::Auto => {
-                    let obj = mesh.bbox().unwrap();
-                    let height = cloth_box.max.z.max(obj.max.z) - cloth_box.min.z.min(obj.min.z);
-                    let speed = (2.0 * scene.gravity.norm() * height).sqrt();
-                    Collider::auto_dims(&mesh, speed * scene.solver.dt)
-                }
+                Cells::Auto => Collider::auto_dims(&mesh),
             };
             Collider::new(o.name.clone(), mesh, dims, margin, o.friction)
         })
