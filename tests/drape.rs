@@ -286,11 +286,7 @@ fn square_hanging_from_two_corner_pegs_matches_the_converged_answer() {
 
 fn cusick(preset: &str) -> (f64, World) {
     let sc = scene_with("cusick.toml", |s| {
-        s.pieces[0].fabric = Fabric {
-            stretch: [1000.0, 1000.0],
-            damping: 2.0,
-            ..Fabric::preset(preset).unwrap()
-        };
+        s.pieces[0].fabric = Fabric::preset(preset).unwrap();
     });
     let (w, stats) = simulate(&sc);
     assert!(stats.at_rest, "{preset} comes to rest");
@@ -299,12 +295,18 @@ fn cusick(preset: &str) -> (f64, World) {
 
 #[test]
 fn cusick_drape_coefficient_rises_with_bending_rigidity() {
+    // The real presets, unsoftened: measured woven fabrics lie between about 0.3 and 0.9.
+    let sc = scene_with("cusick.toml", |_| {});
+    assert_eq!(sc.pieces[0].fabric, Fabric::cotton());
     let mut last = 0.0;
     for preset in ["silk", "cotton", "denim"] {
         let (dc, w) = cusick(preset);
-        assert!(dc > 0.2 && dc < 0.95, "{preset}: {dc}");
+        assert!(dc > 0.3 && dc < 0.95, "{preset}: {dc}");
         assert!(dc > last, "{preset}: {dc} after {last}");
         assert_eq!(sim::particles_inside(&w), vec![Some(0)]);
+        // A real fabric hardly stretches under its weight, rim included.
+        let (max, _) = sim::strain(&w.model, &w.state.x);
+        assert!(max < 0.01, "{preset}: strain {max}");
         // The specimen hangs over the rim: its edge is well below the disc's top.
         let low = w.state.x.iter().map(|p| p.z).fold(f64::INFINITY, f64::min);
         assert!(low < -0.02, "{preset}: lowest point {low}");
