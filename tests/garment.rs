@@ -260,3 +260,26 @@ fn the_garment_command_reports_a_tube_on_a_cylinder() {
     let garment = std::fs::read_to_string(out.join("tube.obj")).unwrap();
     assert!(garment.contains("g front") && garment.contains("g back"));
 }
+
+#[test]
+fn the_garment_command_refuses_an_explicit_integrator_before_work() {
+    let dir = tempfile::tempdir().unwrap();
+    let pattern = dir.path().join("tube_specification.json");
+    std::fs::write(&pattern, TUBE).unwrap();
+    let out = dir.path().join("out");
+    let o = common::run(&[
+        "garment",
+        pattern.to_str().unwrap(),
+        "--body",
+        "no_such_body.obj",
+        "-o",
+        out.to_str().unwrap(),
+        "--integrator",
+        "leapfrog",
+    ]);
+    let (_, stderr) = common::text(&o);
+    assert!(!o.status.success());
+    // Refused by the flag's check, before the body is read.
+    assert!(stderr.contains("--integrator leapfrog"), "{stderr}");
+    assert!(!out.exists());
+}

@@ -60,6 +60,10 @@ pub struct GarmentArgs {
     /// Friction between layers of cloth (Coulomb, a fraction of the normal impulse).
     #[arg(long, default_value_t = 0.0)]
     pub cloth_friction: f64,
+    /// The integrator: projective-dynamics (default) or implicit-euler (slower; holds contacts
+    /// as constraints on the motion). The explicit ones would need steps far below 10 ms.
+    #[arg(long, default_value = "projective-dynamics")]
+    pub integrator: crate::cloth::integrate::Integrator,
 }
 
 /// The report of `drapekit garment`.
@@ -181,7 +185,14 @@ fn settings(args: &GarmentArgs) -> anyhow::Result<GarmentSettings> {
     if args.spacing < 0.002 || args.spacing > 0.1 {
         bail!("--spacing {} m: use 0.002 to 0.1 m", args.spacing);
     }
+    if args.integrator.is_explicit() {
+        bail!(
+            "--integrator {}: garments step at 10 ms; use projective-dynamics or implicit-euler",
+            args.integrator
+        );
+    }
     let mut s = GarmentSettings::default();
+    s.solver.integrator = args.integrator;
     s.assemble.spacing = args.spacing;
     s.assemble.fabric = fabric;
     s.friction = args.friction;

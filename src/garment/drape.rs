@@ -16,8 +16,8 @@
 //! pull, or at `sew_max`.
 //! **Stage 2, drape**: gravity on, friction back, the seams at their full constant (stiff
 //! springs of rest length 0, `SEAM_STIFFNESS`), which closes what sewing left; it ends
-//! when the cloth is at rest (kinetic energy below that of the whole garment moving at
-//! [`REST_SPEED`] over a window, `sim::watch::Rest`) or at `settle_max`. Cloth against cloth
+//! when the cloth is at rest (at most [`REST_FRACTION`] of the particles moving faster than
+//! [`REST_SPEED`] over [`REST_FRAMES`] frames of 1/60 s in a row) or at `settle_max`. Cloth against cloth
 //! is on in both stages (`self_collision`).
 //!
 //! The body is a fixed collider in drapekit's frame (metres, z up); `body_frame` brings a
@@ -41,6 +41,17 @@ use serde::Serialize;
 /// A particle moving slower than this is at rest, m/s: the reference pipeline's 0.3 mm per
 /// 1/60 s frame.
 pub const REST_SPEED: f64 = 0.018;
+
+/// The drape is at rest when at most this fraction of the particles moved faster than
+/// [`REST_SPEED`] over each of [`REST_FRAMES`] frames of 1/60 s in a row: the verdict's test
+/// (`measure::Thresholds::moving_fraction`), so a drape that stops at rest passes it. (A
+/// kinetic-energy test stopped `shirt_mean` "at rest" after 0.35 s with 93% of the particles
+/// moving more than 0.3 mm a frame: the collide phase's corrections move particles that the
+/// velocities do not show.)
+pub const REST_FRACTION: f64 = 0.015;
+
+/// Frames in a row that must be at rest (see [`REST_FRACTION`]).
+pub const REST_FRAMES: u32 = 5;
 
 /// The sewing seams' weight relative to the mean particle's `m / h^2` (module notes).
 pub const SEW_WEIGHT: f64 = 1.0;
@@ -350,20 +361,39 @@ pub fn settle(
     let dt = settings.solver.dt;
     world.model.gravity = GRAVITY;
     set_seam_k(&mut world.model, seam_k);
-    let mass: f64 = world.model.mass.iter().sum();
-    let stop = Stop::UntilRest {
-        energy: 0.5 * mass * REST_SPEED * REST_SPEED,
-        max_steps: ((settings.settle_max / dt).round() as u64).max(1),
-    };
-    let stats = sim::run_quiet(world, &settings.solver, stop)?;
-    Ok(StageReport {
-        time: stats.time,
-        steps: stats.steps,
-        wall_seconds: stats.wall_seconds,
-        seam_gap_max: seam_gaps(seams, &world.state.x).0,
-        done: stats.at_rest,
-        sew_weight: 0.0,
-    })
+    let frame = ((1.0 / 60.0 / dt).round() as u64).max(1);
+    let max_steps = ((settings.settle_max / dt).round() as u64).max(1);
+    let mut report = StageReport::default();
+    let mut quiet = 0;
+    while report.steps < max_steps {
+        let before = world.state.x.clone();
+        let stats = sim::run_quiet(world, &settings.solver, Stop::Steps(frame))?;
+        report.time += stats.time;
+        report.steps += stats.steps;
+        report.wall_seconds += stats.wall_seconds;
+        let moving = moved_fraction(&before, &world.state.x, REST_SPEED * stats.time);
+        quiet = if moving <= REST_FRACTION {
+            quiet + 1
+        } else {
+            0
+        };
+        if quiet >= REST_FRAMES {
+            report.done = true;
+            break;
+        }
+    }
+    report.seam_gap_max = seam_gaps(seams, &world.state.x).0;
+    Ok(report)
+}
+
+/// The fraction of particles that moved more than `limit` (m) from `before` to `after`.
+fn moved_fraction(before: &[Point3], after: &[Point3], limit: f64) -> f64 {
+    let moving = before
+        .iter()
+        .zip(after)
+        .filter(|(a, b)| (*b - *a).norm() > limit)
+        .count();
+    moving as f64 / before.len().max(1) as f64
 }
 
 /// Sews and drapes `pattern` on `body` (metres, z up).
@@ -390,11 +420,30 @@ pub fn moving_fraction(world: &mut World, settings: &SolverSettings) -> Result<f
     let before: Vec<Point3> = world.state.x.clone();
     let steps = ((1.0 / 60.0 / settings.dt).round() as u64).max(1);
     let stats = sim::run_quiet(world, settings, Stop::Steps(steps))?;
-    let limit = REST_SPEED * stats.time;
-    let moving = before
-        .iter()
-        .zip(&world.state.x)
-        .filter(|(a, b)| (*b - *a).norm() > limit)
-        .count();
-    Ok(moving as f64 / before.len().max(1) as f64)
+    Ok(moved_fraction(
+        &before,
+        &world.state.x,
+        REST_SPEED * stats.time,
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn moved_fraction_counts_the_particles_past_the_limit() {
+        let before = vec![Point3::origin(); 4];
+        let after = [0.0, 0.2e-3, 0.4e-3, 1e-3].map(|d| Point3::new(d, 0.0, 0.0));
+        // 0.3 mm in a frame: two of the four moved more.
+        let f = moved_fraction(&before, &after, REST_SPEED / 60.0);
+        assert!((f - 0.5).abs() < 1e-12, "{f}");
+    }
+
+    #[test]
+    fn the_drape_stops_at_rest_by_the_verdicts_own_test() {
+        // A drape that stops at rest must not then fail the verdict's moving test.
+        let t = crate::garment::measure::Thresholds::default();
+        assert_eq!(t.moving_fraction, REST_FRACTION);
+    }
 }

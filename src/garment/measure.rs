@@ -32,7 +32,7 @@ impl Default for Thresholds {
             seam_gap_max_mm: 1.0,
             particles_inside: 0,
             max_strain: 0.05,
-            moving_fraction: 0.015,
+            moving_fraction: super::drape::REST_FRACTION,
             body_crossing_edges: 0,
             self_crossing_edges: 10,
         }
