@@ -227,6 +227,7 @@ fn the_garment_command_reports_a_tube_on_a_cylinder() {
         "0.02",
         "--settle-max",
         "0.1",
+        "--panels",
         "--json",
     ]);
     let (stdout, stderr) = common::text(&o);
@@ -255,31 +256,64 @@ fn the_garment_command_reports_a_tube_on_a_cylinder() {
         .as_str()
         .unwrap()
         .contains("guessed from its height"));
-    // The garment as one OBJ with a group per panel, and the body as placed.
-    assert_eq!(common::listing(&out), vec!["column.obj", "tube.obj"]);
+    // The garment as one OBJ with a group per panel, the body as placed, and (`--panels`)
+    // each panel alone: together they hold every particle and triangle once.
+    assert_eq!(
+        common::listing(&out),
+        vec!["column.obj", "panels", "tube.obj"]
+    );
     let garment = std::fs::read_to_string(out.join("tube.obj")).unwrap();
     assert!(garment.contains("g front") && garment.contains("g back"));
+    let count = |text: &str, tag: &str| text.lines().filter(|l| l.starts_with(tag)).count();
+    let (mut v, mut f) = (0, 0);
+    for (p, m) in ["front", "back"].iter().zip(panels) {
+        let text = std::fs::read_to_string(out.join("panels").join(format!("{p}.obj"))).unwrap();
+        assert_eq!(
+            count(&text, "v ") as u64,
+            m["particles"].as_u64().unwrap(),
+            "{p}"
+        );
+        v += count(&text, "v ");
+        f += count(&text, "f ");
+    }
+    assert_eq!(v, count(&garment, "v "));
+    assert_eq!(f, count(&garment, "f "));
 }
 
-#[test]
-fn the_garment_command_refuses_an_explicit_integrator_before_work() {
+/// Runs `garment` on `pattern` (the text of a specification) with a body that does not exist
+/// and `extra` flags: whether it failed, its stderr, and whether anything was written.
+fn refused_before_work(pattern: &str, extra: &[&str]) -> (bool, String, bool) {
     let dir = tempfile::tempdir().unwrap();
-    let pattern = dir.path().join("tube_specification.json");
-    std::fs::write(&pattern, TUBE).unwrap();
+    let path = dir.path().join("tube_specification.json");
+    std::fs::write(&path, pattern).unwrap();
     let out = dir.path().join("out");
-    let o = common::run(&[
+    let mut args = vec![
         "garment",
-        pattern.to_str().unwrap(),
+        path.to_str().unwrap(),
         "--body",
         "no_such_body.obj",
         "-o",
         out.to_str().unwrap(),
-        "--integrator",
-        "leapfrog",
-    ]);
+    ];
+    args.extend_from_slice(extra);
+    let o = common::run(&args);
     let (_, stderr) = common::text(&o);
-    assert!(!o.status.success());
+    let wrote = out.exists() || dir.path().join("front.obj").exists();
+    (!o.status.success(), stderr, wrote)
+}
+
+#[test]
+fn a_panel_name_that_is_not_a_file_name_is_refused_before_work() {
+    let bad = TUBE.replace("\"front\"", "\"../front\"");
+    let (failed, stderr, wrote) = refused_before_work(&bad, &["--panels"]);
+    assert!(failed && !wrote);
+    assert!(stderr.contains("\"../front\""), "{stderr}");
+}
+
+#[test]
+fn the_garment_command_refuses_an_explicit_integrator_before_work() {
+    let (failed, stderr, wrote) = refused_before_work(TUBE, &["--integrator", "leapfrog"]);
+    assert!(failed && !wrote);
     // Refused by the flag's check, before the body is read.
     assert!(stderr.contains("--integrator leapfrog"), "{stderr}");
-    assert!(!out.exists());
 }

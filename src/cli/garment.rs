@@ -64,6 +64,9 @@ pub struct GarmentArgs {
     /// as constraints on the motion). The explicit ones would need steps far below 10 ms.
     #[arg(long, default_value = "projective-dynamics")]
     pub integrator: crate::cloth::integrate::Integrator,
+    /// Also write each panel alone, as `OUT_DIR/panels/<panel>.obj`.
+    #[arg(long)]
+    pub panels: bool,
 }
 
 /// The report of `drapekit garment`.
@@ -223,6 +226,63 @@ fn garment_mesh(world: &sim::World) -> (TriMesh, Vec<(String, usize, usize)>) {
     (TriMesh::new(positions, m.triangles.clone()), groups)
 }
 
+/// Refuses, before any work, panel names that cannot be file names inside the output
+/// folder (`--panels`): empty, `.` or `..`, or holding a path separator or a control character.
+fn check_panel_names(pattern: &crate::garment::spec::Pattern, path: &Path) -> anyhow::Result<()> {
+    let bad: Vec<String> = pattern
+        .panels
+        .iter()
+        .map(|p| &p.name)
+        .filter(|n| {
+            n.is_empty()
+                || *n == "."
+                || *n == ".."
+                || n.chars()
+                    .any(|c| matches!(c, '/' | '\\' | ':') || c.is_control())
+        })
+        .map(|n| format!("{n:?}"))
+        .collect();
+    if !bad.is_empty() {
+        bail!(
+            "{}: panel names {} cannot be file names for --panels (no '/', '\\', ':', control characters, '.' or '..')",
+            path.display(),
+            bad.join(", ")
+        );
+    }
+    Ok(())
+}
+
+/// Writes each panel alone into `dir` (`<panel>.obj`, its vertices renumbered). Returns the
+/// files written.
+fn write_panels(
+    dir: &Path,
+    mesh: &TriMesh,
+    groups: &[(String, usize, usize)],
+    inputs: &[&Path],
+) -> anyhow::Result<Vec<String>> {
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    let mut files = Vec::new();
+    for (name, first, count) in groups {
+        let mut index = vec![u32::MAX; mesh.positions.len()];
+        let mut positions = Vec::new();
+        let mut faces = Vec::with_capacity(*count);
+        for f in &mesh.faces[*first..first + count] {
+            faces.push(f.map(|v| {
+                if index[v as usize] == u32::MAX {
+                    index[v as usize] = positions.len() as u32;
+                    positions.push(mesh.positions[v as usize]);
+                }
+                index[v as usize]
+            }));
+        }
+        let path = dir.join(format!("{name}.obj"));
+        let panel = TriMesh::new(positions, faces);
+        io::write_mesh(&path, &panel, &io::WriteOptions::default(), inputs)?;
+        files.push(path.display().to_string());
+    }
+    Ok(files)
+}
+
 /// Writes an OBJ with a group per panel.
 fn write_groups(
     path: &Path,
@@ -252,6 +312,9 @@ pub fn run(args: GarmentArgs) -> anyhow::Result<()> {
     let start = std::time::Instant::now();
     let settings = settings(&args)?;
     let pattern = crate::garment::read(&args.pattern)?;
+    if args.panels {
+        check_panel_names(&pattern, &args.pattern)?;
+    }
     let (body, body_note) = read_body(&args.body, &args.body_units)?;
     if args.output.is_file() {
         bail!(
@@ -291,6 +354,15 @@ pub fn run(args: GarmentArgs) -> anyhow::Result<()> {
     let (mesh, groups) = garment_mesh(&g.world);
     let garment_path = args.output.join(format!("{name}.obj"));
     write_groups(&garment_path, &mesh, &groups, &inputs)?;
+    let mut files = vec![garment_path.display().to_string()];
+    if args.panels {
+        files.extend(write_panels(
+            &args.output.join("panels"),
+            &mesh,
+            &groups,
+            &inputs,
+        )?);
+    }
     let mut body_mesh = c.mesh.clone();
     change_up(&mut body_mesh, Up::Z, Up::Y);
     let body_path = args.output.join(format!(
@@ -333,10 +405,10 @@ pub fn run(args: GarmentArgs) -> anyhow::Result<()> {
         thresholds,
         verdict: if failed.is_empty() { "pass" } else { "fail" }.into(),
         failed,
-        files: vec![
-            garment_path.display().to_string(),
-            body_path.display().to_string(),
-        ],
+        files: files
+            .into_iter()
+            .chain([body_path.display().to_string()])
+            .collect(),
         wall_seconds: start.elapsed().as_secs_f64(),
     };
     super::finish(
