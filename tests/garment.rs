@@ -317,3 +317,39 @@ fn the_garment_command_refuses_an_explicit_integrator_before_work() {
     // Refused by the flag's check, before the body is read.
     assert!(stderr.contains("--integrator leapfrog"), "{stderr}");
 }
+
+#[test]
+fn a_panel_facing_into_the_body_is_refused_by_name() {
+    // The tube's back panel without its half turn: its outline faces the cylinder.
+    let flipped = TUBE.replace(
+        r#""translation": [0, 80, -30], "rotation": [0, 180, 0]"#,
+        r#""translation": [0, 80, -30], "rotation": [0, 0, 0]"#,
+    );
+    assert_ne!(flipped, TUBE);
+    let body = cylinder(0.186, 0.5, 1.5, 48);
+    let good = parse(TUBE, Path::new("tube.json")).unwrap();
+    assert!(garment_world(&good, body.clone(), &GarmentSettings::default()).is_ok());
+    let bad = parse(&flipped, Path::new("tube.json")).unwrap();
+    let Err(e) = garment_world(&bad, body, &GarmentSettings::default()) else {
+        panic!("a panel facing in was accepted");
+    };
+    let msg = e.to_string();
+    assert!(msg.contains("back (180 degrees"), "{msg}");
+    assert!(!msg.contains("front"), "{msg}");
+}
+
+#[test]
+fn the_real_patterns_face_out_of_the_body() {
+    let Some(root) = common::realdata() else {
+        return;
+    };
+    let mut panels = 0;
+    for name in ["dress_pencil", "hoody_mean", "js_mean_all", "shirt_mean"] {
+        let path = root.join(format!("patterns/{name}_specification.json"));
+        let p = drapekit::garment::read(&path).unwrap();
+        // GarmentCode's bodies stand on the y axis.
+        assert_eq!(drapekit::garment::facing::facing_in(&p, [0.0, 0.0]), vec![]);
+        panels += p.panels.len();
+    }
+    assert_eq!(panels, 32);
+}

@@ -33,6 +33,7 @@ use crate::cloth::model::ClothModel;
 use crate::collide::cloth::SelfCollisionOptions;
 use crate::collide::Collider;
 use crate::math::{Point3, Vec3};
+use crate::mesh::transform::{change_up_point, Up};
 use crate::mesh::TriMesh;
 use crate::sim::{self, SelfContact, SimError, Stop, World};
 use rayon::prelude::*;
@@ -177,6 +178,10 @@ pub enum GarmentError {
     /// The body has no faces.
     #[error("the body has no faces")]
     EmptyBody,
+    /// Panels whose outline faces into the body (`facing`): each name and the angle between
+    /// its normal and the way out, degrees.
+    #[error("{} facing into the body (the outline's normal, counter-clockwise seen from outside, points toward the body's axis): {}; reverse the outline or fix the rotation", if .0.len() == 1 { "a panel is" } else { "panels are" }, .0.iter().map(|(n, a)| format!("{n} ({a:.0} degrees from outward)")).collect::<Vec<_>>().join(", "))]
+    FacingIn(Vec<(String, f64)>),
     /// The simulation failed.
     #[error(transparent)]
     Sim(#[from] SimError),
@@ -189,8 +194,14 @@ pub fn garment_world(
     body: TriMesh,
     settings: &GarmentSettings,
 ) -> Result<(World, Vec<SeamPair>, f64), GarmentError> {
-    if body.faces.is_empty() {
+    let Some(bbox) = body.bbox().filter(|_| !body.faces.is_empty()) else {
         return Err(GarmentError::EmptyBody);
+    };
+    // The body's vertical axis in the pattern's frame (y up) and units.
+    let c = change_up_point(bbox.center(), Up::Z, Up::Y).coords * pattern.units_in_meter;
+    let facing = super::facing::facing_in(pattern, [c.x, c.z]);
+    if !facing.is_empty() {
+        return Err(GarmentError::FacingIn(facing));
     }
     let assembled = assemble(pattern, &settings.assemble).map_err(GarmentError::Assemble)?;
     let (mut model, x) = ClothModel::assemble(&assembled.pieces, Vec3::zeros());

@@ -9,6 +9,7 @@
 pub mod assemble;
 pub mod curve;
 pub mod drape;
+pub mod facing;
 pub mod lift;
 pub mod measure;
 pub mod sample;
