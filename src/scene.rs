@@ -26,6 +26,7 @@
 //! [[piece]]
 //! name = "skirt"                   # default piece1, piece2, ...
 //! outline = [[-0.5, -0.5], [0.5, -0.5], [0.5, 0.5], [-0.5, 0.5]]
+//! holes = [[[-0.1, -0.1], [0.1, -0.1], [0.1, 0.1], [-0.1, 0.1]]]  # optional cut-outs
 //! spacing = 0.01
 //! position = [0.0, 0.0, 0.5]       # where the piece's (0, 0) goes
 //! rotation = [0.0, 0.0, 0.0]       # degrees about x, then y, then z
@@ -187,6 +188,8 @@ struct ObjectFile {
 struct PieceFile {
     name: Option<String>,
     outline: Vec<[f64; 2]>,
+    #[serde(default)]
+    holes: Vec<Vec<[f64; 2]>>,
     spacing: f64,
     position: Option<[f64; 3]>,
     rotation: Option<[f64; 3]>,
@@ -276,6 +279,8 @@ pub struct PieceSpec {
     pub name: String,
     /// Outline in the piece's plane.
     pub outline: Vec<Point2>,
+    /// Holes cut out of it (closed outlines inside it, apart from each other).
+    pub holes: Vec<Vec<Point2>>,
     /// Particle spacing.
     pub spacing: f64,
     /// Where the piece's origin goes.
@@ -698,6 +703,15 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
                 format!("a polygon needs at least 3 points, got {}", outline.len()),
             );
         }
+        let holes: Vec<Vec<Point2>> = p
+            .holes
+            .iter()
+            .map(|h| {
+                h.iter()
+                    .map(|q| Point2::new(q[0] * to_m, q[1] * to_m))
+                    .collect()
+            })
+            .collect();
         for q in &p.pin {
             finite(&k("pin"), q);
         }
@@ -715,6 +729,7 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
         pieces.push(PieceSpec {
             name: p.name.clone().unwrap_or_else(|| format!("piece{}", i + 1)),
             outline,
+            holes,
             spacing,
             position: Vec3::from(position) * to_m,
             rotation,

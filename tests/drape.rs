@@ -1177,3 +1177,36 @@ fn an_explicit_scene_without_dt_steps_just_under_its_stability_estimate() {
     );
     assert!(!dir.join("out2").exists());
 }
+
+#[test]
+fn a_scene_piece_with_a_hole_has_no_cloth_in_the_hole() {
+    let tmp = scratch("hole");
+    let dir = tmp.path();
+    std::fs::copy(
+        common::fixture("scenes/sphere_r0.3.obj"),
+        dir.join("sphere_r0.3.obj"),
+    )
+    .unwrap();
+    // A 20 cm square hole in the middle of the 80 cm square.
+    let holed = GOOD.replace(
+        "spacing = 0.05",
+        "holes = [[[-0.1, -0.1], [0.1, -0.1], [0.1, 0.1], [-0.1, 0.1]]]\nspacing = 0.05",
+    );
+    std::fs::write(dir.join("holed.toml"), &holed).unwrap();
+    let sc = scene::read(&dir.join("holed.toml")).unwrap();
+    let w = sim::load(&sc).unwrap();
+    let area: f64 = w.model.pieces[0].area;
+    assert!((area - (0.64 - 0.04)).abs() < 1e-9, "{area}");
+    let in_hole = |p: &Point3| p.x.abs() < 0.1 - 1e-9 && p.y.abs() < 0.1 - 1e-9;
+    assert!(!w.state.x.iter().any(in_hole));
+    // A hole that leaves the outline is refused, naming the key and the hole.
+    let bad = GOOD.replace(
+        "spacing = 0.05",
+        "holes = [[[0.3, -0.1], [0.5, -0.1], [0.5, 0.1], [0.3, 0.1]]]\nspacing = 0.05",
+    );
+    refused(
+        "hole_out",
+        &bad,
+        &["piece[1].holes", "hole 1 is not inside the outline"],
+    );
+}

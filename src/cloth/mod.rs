@@ -4,6 +4,7 @@
 pub mod elements;
 pub mod fabric;
 pub mod forces;
+pub mod holes;
 pub mod integrate;
 pub mod model;
 pub mod pattern;

@@ -205,6 +205,9 @@ pub enum PatternError {
         a: [f64; 2],
         b: [f64; 2],
     },
+    /// A hole that is not a clean outline inside the piece's, apart from the others.
+    #[error("hole {hole} {reason}")]
+    Hole { hole: usize, reason: String },
     /// A pin away from every particle.
     #[error("pin {index} at ({x}, {y}) is {distance:.3e} from the nearest particle; pins must be outline points or grid crossings")]
     Pin {
@@ -228,7 +231,7 @@ fn segment_distance(p: &Point2, a: &Point2, b: &Point2) -> f64 {
 }
 
 /// Whether segments (a, b) and (c, d) cross or touch, beyond shared endpoints.
-fn segments_meet(a: &Point2, b: &Point2, c: &Point2, d: &Point2) -> bool {
+pub(crate) fn segments_meet(a: &Point2, b: &Point2, c: &Point2, d: &Point2) -> bool {
     let (d1, d2, d3, d4) = (
         orient2d(a, b, c),
         orient2d(a, b, d),
@@ -294,6 +297,21 @@ pub fn clean_outline(outline: &[Point2]) -> Result<Vec<Point2>, PatternError> {
     Ok(p)
 }
 
+/// Samples the closed polygon `poly` at most `h` apart (its corners included) into `flat`:
+/// the new particles' indices, in order.
+fn sample_loop(poly: &[Point2], h: f64, flat: &mut Vec<Point2>) -> Vec<u32> {
+    let mut out = Vec::new();
+    for e in 0..poly.len() {
+        let (a, b) = (poly[e], poly[(e + 1) % poly.len()]);
+        let m = ((b - a).norm() / h).ceil().max(1.0) as usize;
+        for k in 0..m {
+            out.push(flat.len() as u32);
+            flat.push(a + (b - a) * (k as f64 / m as f64));
+        }
+    }
+    out
+}
+
 fn inside(poly: &[Point2], q: &Point2) -> bool {
     crate::fit::scan::contains(poly, q)
 }
@@ -343,10 +361,22 @@ pub fn build(
     fabric: &Fabric,
     pins: &Pins,
 ) -> Result<Piece, PatternError> {
+    build_with_holes(outline, &[], spacing, fabric, pins)
+}
+
+/// [`build`] with `holes` cut out of the piece (`cloth::holes`).
+pub fn build_with_holes(
+    outline: &[Point2],
+    holes: &[Vec<Point2>],
+    spacing: f64,
+    fabric: &Fabric,
+    pins: &Pins,
+) -> Result<Piece, PatternError> {
     if !(spacing.is_finite() && spacing > 0.0) {
         return Err(PatternError::Spacing { spacing });
     }
     let poly = clean_outline(outline)?;
+    let cut = super::holes::check_holes(&poly, holes)?;
     let h = spacing;
     let (mut x0, mut x1, mut y0, mut y1) = (
         f64::INFINITY,
@@ -375,7 +405,12 @@ pub fn build(
         .flat_map(|j| (0..ni).map(move |i| (i, j)))
         .map(|(i, j)| {
             let q = node(i, j);
-            inside(&poly, &q) && distance_to_outline(&poly, &q) >= CLEARANCE * h
+            inside(&poly, &q)
+                && distance_to_outline(&poly, &q) >= CLEARANCE * h
+                && !super::holes::in_any(&cut, &q)
+                && cut
+                    .iter()
+                    .all(|c| distance_to_outline(c, &q) >= CLEARANCE * h)
         })
         .collect();
     let full = |i: usize, j: usize| {
@@ -408,15 +443,16 @@ pub fn build(
         }
     }
     let grid_particles = flat.len();
-    let mut outer: Vec<u32> = Vec::new();
-    for e in 0..poly.len() {
-        let (a, b) = (poly[e], poly[(e + 1) % poly.len()]);
-        let m = ((b - a).norm() / h).ceil().max(1.0) as usize;
-        for k in 0..m {
-            outer.push(flat.len() as u32);
-            flat.push(a + (b - a) * (k as f64 / m as f64));
-        }
-    }
+    let outer = sample_loop(&poly, h, &mut flat);
+    // The holes' edges, clockwise: holes of the band, like the blocks of full cells.
+    let cut_loops: Vec<Vec<u32>> = cut
+        .iter()
+        .map(|c| {
+            let mut cw = c.clone();
+            cw.reverse();
+            sample_loop(&cw, h, &mut flat)
+        })
+        .collect();
     let id = |i: usize, j: usize| index[j * ni + i];
     // Triangles of full cells.
     let mut triangles: Vec<[u32; 3]> = Vec::new();
@@ -487,6 +523,7 @@ pub fn build(
         lp.reverse();
         holes.push(lp);
     }
+    holes.extend(cut_loops);
     let pos3: Vec<Point3> = flat.iter().map(|p| Point3::new(p.x, p.y, 0.0)).collect();
     let band = triangulate_with_holes(&pos3, &outer, &holes);
     triangles.extend_from_slice(&band);
@@ -675,6 +712,96 @@ mod tests {
             Point2::new(s, s),
             Point2::new(-s, s),
         ]
+    }
+
+    #[test]
+    fn a_hole_is_cut_out_and_bordered_by_its_own_edge() {
+        let f = Fabric::cotton();
+        // A 1 m square with a 30 cm circular-ish hole (a 24-gon) off centre.
+        let hole: Vec<Point2> = (0..24)
+            .map(|k| {
+                let t = k as f64 * std::f64::consts::TAU / 24.0;
+                Point2::new(0.1 + 0.15 * t.cos(), -0.05 + 0.15 * t.sin())
+            })
+            .collect();
+        let p = build_with_holes(
+            &square(0.5),
+            std::slice::from_ref(&hole),
+            0.02,
+            &f,
+            &Pins::default(),
+        )
+        .unwrap();
+        let hole_area = 0.5 * crate::fit::section::signed_area2(&hole);
+        assert!((p.area - (1.0 - hole_area)).abs() < 1e-9, "{}", p.area);
+        let mass: f64 = p.mass.iter().sum();
+        assert!((mass - f.density * p.area).abs() < 1e-9 * mass);
+        // No triangle and no particle inside the hole.
+        for t in &p.triangles {
+            let c = Point2::from(
+                (p.flat[t[0] as usize].coords
+                    + p.flat[t[1] as usize].coords
+                    + p.flat[t[2] as usize].coords)
+                    / 3.0,
+            );
+            assert!(!crate::fit::scan::contains(&hole, &c), "{c:?}");
+        }
+        // Two boundary loops: every edge used by one triangle is on the outline or the hole.
+        let mut count: HashMap<(u32, u32), u32> = HashMap::new();
+        for t in &p.triangles {
+            for e in 0..3 {
+                let (a, b) = (t[e], t[(e + 1) % 3]);
+                *count.entry((a.min(b), a.max(b))).or_default() += 1;
+            }
+        }
+        let border: Vec<(u32, u32)> = count
+            .into_iter()
+            .filter(|e| e.1 == 1)
+            .map(|e| e.0)
+            .collect();
+        let on_hole = |v: u32| {
+            let q = p.flat[v as usize];
+            ((q - Point2::new(0.1, -0.05)).norm() - 0.15).abs() < 0.02
+        };
+        let inner = border
+            .iter()
+            .filter(|(a, b)| on_hole(*a) && on_hole(*b))
+            .count();
+        let hole_len = crate::fit::section::perimeter(&hole);
+        assert!(
+            inner as f64 >= hole_len / 0.02,
+            "{inner} edges round the hole"
+        );
+        assert_eq!(border.len() - inner, 4 * 50, "outline edges");
+    }
+
+    #[test]
+    fn holes_outside_the_outline_or_meeting_are_refused_by_number() {
+        let f = Fabric::cotton();
+        let sq = |c: f64, r: f64| -> Vec<Point2> {
+            square(r)
+                .iter()
+                .map(|p| Point2::new(p.x + c, p.y))
+                .collect()
+        };
+        // The second hole of the pair, centred at `c`.
+        let refused = |c: f64| -> String {
+            let holes = [sq(0.0, 0.1), sq(c, 0.1)];
+            match build_with_holes(&square(0.5), &holes, 0.05, &f, &Pins::default()) {
+                Err(PatternError::Hole { hole: 2, reason }) => reason,
+                other => panic!("{other:?}"),
+            }
+        };
+        assert_eq!(refused(0.45), "is not inside the outline");
+        assert_eq!(refused(0.15), "meets hole 1");
+        assert!(build_with_holes(
+            &square(0.5),
+            &[sq(0.0, 0.1), sq(0.3, 0.1)],
+            0.05,
+            &f,
+            &Pins::default()
+        )
+        .is_ok());
     }
 
     #[test]

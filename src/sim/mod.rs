@@ -161,7 +161,7 @@ pub fn load(scene: &Scene) -> Result<World, SceneError> {
     let mut errors: Vec<SceneError> = Vec::new();
     let mut pieces = Vec::new();
     for (i, p) in scene.pieces.iter().enumerate() {
-        match pattern::build(&p.outline, p.spacing, &p.fabric, &p.pins) {
+        match pattern::build_with_holes(&p.outline, &p.holes, p.spacing, &p.fabric, &p.pins) {
             Ok(built) => {
                 let r = rotation(p.rotation);
                 let placed: Vec<Point3> = built
@@ -173,7 +173,14 @@ pub fn load(scene: &Scene) -> Result<World, SceneError> {
             }
             Err(error) => errors.push(SceneError::Piece {
                 path: scene.path.clone(),
-                key: format!("piece[{}].outline", i + 1),
+                key: format!(
+                    "piece[{}].{}",
+                    i + 1,
+                    match error {
+                        pattern::PatternError::Hole { .. } => "holes",
+                        _ => "outline",
+                    }
+                ),
                 error,
             }),
         }
