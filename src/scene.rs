@@ -132,6 +132,8 @@ struct File {
     object: Vec<ObjectFile>,
     piece: Vec<PieceFile>,
     #[serde(default)]
+    seam: Vec<SeamFile>,
+    #[serde(default)]
     fabric: BTreeMap<String, FabricFile>,
     output: Option<OutputFile>,
     report: Option<ReportFile>,
@@ -181,6 +183,21 @@ struct ObjectFile {
     scale: Option<f64>,
     translate: Option<[f64; 3]>,
     friction: Option<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SeamFile {
+    a: SeamSideFile,
+    b: SeamSideFile,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SeamSideFile {
+    piece: String,
+    from: [f64; 2],
+    to: [f64; 2],
 }
 
 #[derive(Deserialize)]
@@ -272,6 +289,28 @@ pub struct ObjectSpec {
     pub friction: Option<f64>,
 }
 
+/// One side of a seam: the stretch of a piece's outline from corner `from` to corner `to`,
+/// counter-clockwise (piece coordinates, metres).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SeamSide {
+    /// The piece's index in `Scene::pieces`.
+    pub piece: usize,
+    /// The corner the stretch starts at.
+    pub from: Point2,
+    /// The corner it ends at.
+    pub to: Point2,
+}
+
+/// A seam of a scene: side `a` sewn to side `b`, `a`'s `from` to `b`'s `to` (two pieces'
+/// counter-clockwise outlines run opposite ways along a seam between them).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SeamSpec {
+    /// One side.
+    pub a: SeamSide,
+    /// The other.
+    pub b: SeamSide,
+}
+
 /// A piece, as the scene places it (lengths in metres).
 #[derive(Debug, Clone, PartialEq)]
 pub struct PieceSpec {
@@ -319,6 +358,8 @@ pub struct Scene {
     pub objects: Vec<ObjectSpec>,
     /// Pieces.
     pub pieces: Vec<PieceSpec>,
+    /// Seams between pieces' outline stretches (`sim::seams`).
+    pub seams: Vec<SeamSpec>,
     /// Also write PLY.
     pub ply: bool,
     /// Write every k-th step as a frame.
@@ -755,6 +796,30 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
     if let Some(w) = names.windows(2).find(|w| w[0] == w[1]) {
         bad("piece.name", format!("two pieces are named '{}'", w[0]));
     }
+    let mut seams = Vec::new();
+    for (i, sf) in f.seam.iter().enumerate() {
+        let side = |s: &SeamSideFile, which: &str| -> Option<SeamSide> {
+            let key = format!("seam[{}].{which}", i + 1);
+            finite(&format!("{key}.from"), &s.from);
+            finite(&format!("{key}.to"), &s.to);
+            let Some(piece) = pieces.iter().position(|p| p.name == s.piece) else {
+                bad(
+                    &format!("{key}.piece"),
+                    format!("no piece is named '{}'", s.piece),
+                );
+                return None;
+            };
+            let pt = |q: [f64; 2]| Point2::new(q[0] * to_m, q[1] * to_m);
+            Some(SeamSide {
+                piece,
+                from: pt(s.from),
+                to: pt(s.to),
+            })
+        };
+        if let (Some(a), Some(b)) = (side(&sf.a, "a"), side(&sf.b, "b")) {
+            seams.push(SeamSpec { a, b });
+        }
+    }
     let out = f.output.unwrap_or(OutputFile {
         ply: None,
         frames: None,
@@ -776,6 +841,7 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
             cells,
             objects,
             pieces,
+            seams,
             ply: out.ply.unwrap_or(false),
             frames: out.frames.filter(|&k| k > 0),
             disc_radius,

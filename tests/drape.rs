@@ -1210,3 +1210,62 @@ fn a_scene_piece_with_a_hole_has_no_cloth_in_the_hole() {
         &["piece[1].holes", "hole 1 is not inside the outline"],
     );
 }
+
+#[test]
+fn a_scene_seam_sews_two_pieces_edge_to_edge() {
+    let tmp = scratch("seam");
+    let dir = tmp.path();
+    // Two 20 cm squares of real cotton side by side, 4 cm apart, weightless: the seam joins
+    // the left one's right edge (bottom to top) to the right one's left edge.
+    let text = |a_from: &str| {
+        format!(
+            r#"units = "m"
+gravity = [0.0, 0.0, 0.0]
+[solver]
+duration = 1.0
+[[piece]]
+name = "left"
+outline = [[-0.1, -0.1], [0.1, -0.1], [0.1, 0.1], [-0.1, 0.1]]
+spacing = 0.02
+position = [-0.12, 0.0, 0.5]
+fabric = "cotton"
+[[piece]]
+name = "right"
+outline = [[-0.1, -0.1], [0.1, -0.1], [0.1, 0.1], [-0.1, 0.1]]
+spacing = 0.02
+position = [0.12, 0.0, 0.5]
+fabric = "cotton"
+[[seam]]
+a = {{ piece = "left", from = {a_from}, to = [0.1, 0.1] }}
+b = {{ piece = "right", from = [-0.1, 0.1], to = [-0.1, -0.1] }}
+"#
+        )
+    };
+    std::fs::write(dir.join("seam.toml"), text("[0.1, -0.1]")).unwrap();
+    let sc = scene::read(&dir.join("seam.toml")).unwrap();
+    let (w, _) = simulate(&sc);
+    let seams: Vec<_> = w
+        .model
+        .springs
+        .iter()
+        .filter(|s| s.kind == drapekit::cloth::elements::SpringKind::Seam)
+        .collect();
+    // Eleven particles a side at 2 cm, sewn bottom to bottom, top to top.
+    assert_eq!(seams.len(), 11);
+    for s in &seams {
+        let (a, b) = (w.state.x[s.a as usize], w.state.x[s.b as usize]);
+        assert!((a - b).norm() < 1e-3, "gap {}", (a - b).norm());
+        assert!((a.y - b.y).abs() < 1e-3);
+    }
+    assert!(
+        w.self_contact.is_some(),
+        "sewn pieces collide with each other"
+    );
+    // A side that does not start at an outline corner is refused, naming the seam's key.
+    let bad = text("[0.1, -0.05]");
+    refused(
+        "seam_off",
+        &bad,
+        &["seam[1].a", "not on the outline of piece 'left'"],
+    );
+}

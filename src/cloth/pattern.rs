@@ -170,6 +170,8 @@ pub struct Piece {
     pub area: f64,
     /// Grid particles (the first ones).
     pub grid_particles: usize,
+    /// The outline's particles in order, counter-clockwise from its first corner.
+    pub outline_particles: Vec<u32>,
 }
 
 /// What is wrong with a piece.
@@ -698,6 +700,7 @@ pub fn build_with_holes(
         pinned,
         area,
         grid_particles,
+        outline_particles: outer,
     })
 }
 

@@ -18,6 +18,7 @@
 
 pub mod measure;
 pub mod reference;
+pub mod seams;
 pub mod settings;
 pub mod watch;
 
@@ -25,6 +26,7 @@ pub use measure::{drape_coefficient, inside, min_clearance, particles_inside, st
 pub use settings::{Cells, Stop};
 pub use watch::Instability;
 
+use crate::cloth::elements::{Spring, SpringKind};
 use crate::cloth::fabric::Fabric;
 use crate::cloth::integrate::{
     self, Integrator, SolveStats, Solver, SolverSettings, StepIn, StepOut,
@@ -217,10 +219,26 @@ pub fn load(scene: &Scene) -> Result<World, SceneError> {
             }),
         }
     }
+    let sewn = if errors.is_empty() {
+        scene_seams(scene, &pieces, &mut errors)
+    } else {
+        Vec::new()
+    };
     if !errors.is_empty() {
         return Err(SceneError::combine(&scene.path, errors));
     }
-    let (model, x) = ClothModel::assemble(&pieces, scene.gravity);
+    let (mut model, x) = ClothModel::assemble(&pieces, scene.gravity);
+    let springs: Vec<Spring> = sewn
+        .iter()
+        .map(|&([a, b], k)| Spring {
+            a,
+            b,
+            rest: 0.0,
+            k,
+            kind: SpringKind::Seam,
+        })
+        .collect();
+    model.add_springs(&springs);
     let margin = scene
         .pieces
         .iter()
@@ -238,7 +256,60 @@ pub fn load(scene: &Scene) -> Result<World, SceneError> {
             Collider::new(o.name.clone(), mesh, dims, margin, o.friction)
         })
         .collect();
-    Ok(World::new(model, x, colliders, scene.solver.integrator))
+    let pairs: Vec<[u32; 2]> = sewn.iter().map(|s| s.0).collect();
+    let mut world = World::new(model, x, colliders, scene.solver.integrator);
+    if !pairs.is_empty() {
+        // Sewn pieces fold against each other: cloth against cloth, as for garments.
+        world.self_contact = Some(SelfContact::new(
+            &world.model,
+            &pairs,
+            crate::collide::cloth::SelfCollisionOptions::default(),
+        ));
+    }
+    Ok(world)
+}
+
+/// The scene's seams (`seams`) as particle pairs of the assembled cloth (pieces in order) with
+/// their spring constant; each bad side is reported in `errors`.
+fn scene_seams(
+    scene: &Scene,
+    pieces: &[(String, pattern::Piece, Fabric, Vec<Point3>)],
+    errors: &mut Vec<SceneError>,
+) -> Vec<([u32; 2], f64)> {
+    let mut first = vec![0u32];
+    for p in pieces {
+        first.push(first.last().unwrap() + p.1.flat.len() as u32);
+    }
+    let mut out = Vec::new();
+    for (i, s) in scene.seams.iter().enumerate() {
+        let side = |side: &crate::scene::SeamSide, which: &str| {
+            let (name, piece, ..) = &pieces[side.piece];
+            seams::stretch(piece, name, &side.from, &side.to).map_err(|e| SceneError::Key {
+                path: scene.path.clone(),
+                key: format!("seam[{}].{which}", i + 1),
+                message: e.to_string(),
+            })
+        };
+        match (side(&s.a, "a"), side(&s.b, "b")) {
+            (Ok((ia, ta)), Ok((ib, tb))) => {
+                let stiff = |k: usize| {
+                    let f = &pieces[k].2;
+                    f.stretch[0].max(f.stretch[1])
+                };
+                let k = crate::garment::assemble::SEAM_STIFFNESS
+                    * stiff(s.a.piece).max(stiff(s.b.piece));
+                // a's `from` meets b's `to`: the sides run opposite ways.
+                let tb: Vec<f64> = tb.iter().map(|t| 1.0 - t).collect();
+                for (x, y) in seams::pair_by_fraction(&ta, &tb) {
+                    let a = first[s.a.piece] + ia[x];
+                    let b = first[s.b.piece] + ib[y];
+                    out.push(([a, b], k));
+                }
+            }
+            (a, b) => errors.extend(a.err().into_iter().chain(b.err())),
+        }
+    }
+    out
 }
 
 impl World {
