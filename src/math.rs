@@ -130,3 +130,30 @@ impl SplitMix {
         ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
     }
 }
+
+/// `x` for people: at most four significant digits, plain between 1e-3 and 1e4, else in
+/// scientific notation (never hundreds of digits).
+///
+/// ```
+/// use drapekit::math::short;
+/// assert_eq!(short(0.01), "0.01");
+/// assert_eq!(short(1.0 / 3.0), "0.3333");
+/// assert_eq!(short(1e-300), "1.000e-300");
+/// assert_eq!(short(2500.0), "2500");
+/// ```
+pub fn short(x: f64) -> String {
+    let a = x.abs();
+    if x == 0.0 || !x.is_finite() {
+        return format!("{x}");
+    }
+    if !(1e-3..1e4).contains(&a) {
+        return format!("{x:.3e}");
+    }
+    let decimals = (3 - a.log10().floor() as i32).max(0) as usize;
+    let s = format!("{x:.decimals$}");
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    }
+}

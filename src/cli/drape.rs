@@ -368,7 +368,7 @@ fn step_text(r: &DrapeReport) -> String {
             crate::scene::EXPLICIT_STEP_FRACTION
         )
     } else {
-        format!("{} s", r.dt)
+        format!("{} s", crate::math::short(r.dt))
     }
 }
 
