@@ -8,6 +8,7 @@ pub mod cloth;
 pub mod collide;
 pub mod fit;
 pub mod garment;
+pub mod geom;
 pub mod io;
 pub mod math;
 pub mod mesh;

@@ -55,7 +55,7 @@ pub fn in_any(holes: &[Vec<Point2>], q: &Point2) -> bool {
 }
 
 fn inside(poly: &[Point2], q: &Point2) -> bool {
-    crate::fit::scan::contains(poly, q)
+    crate::geom::contains(poly, q)
 }
 
 /// Whether an edge of closed polygon `a` meets an edge of closed polygon `b`.
@@ -69,6 +69,6 @@ fn crosses(a: &[Point2], b: &[Point2]) -> bool {
     let eb = edges(b);
     edges(a).iter().any(|(p, q)| {
         eb.iter()
-            .any(|(r, s)| super::pattern::segments_meet(p, q, r, s))
+            .any(|(r, s)| crate::geom::segments_meet(p, q, r, s))
     })
 }

@@ -37,6 +37,7 @@
 //! computes only what it needs.
 
 use super::fabric::Fabric;
+use crate::geom::{segment_distance, segments_meet};
 use crate::math::{orient2d, Point2, Point3};
 use crate::mesh::polygon::triangulate_with_holes;
 use std::collections::HashMap;
@@ -220,41 +221,6 @@ pub enum PatternError {
     },
 }
 
-/// Distance from `p` to the segment `a b`.
-fn segment_distance(p: &Point2, a: &Point2, b: &Point2) -> f64 {
-    let d = b - a;
-    let l2 = d.norm_squared();
-    let t = if l2 > 0.0 {
-        ((p - a).dot(&d) / l2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    (p - (a + d * t)).norm()
-}
-
-/// Whether segments (a, b) and (c, d) cross or touch, beyond shared endpoints.
-pub(crate) fn segments_meet(a: &Point2, b: &Point2, c: &Point2, d: &Point2) -> bool {
-    let (d1, d2, d3, d4) = (
-        orient2d(a, b, c),
-        orient2d(a, b, d),
-        orient2d(c, d, a),
-        orient2d(c, d, b),
-    );
-    if ((d1 > 0.0 && d2 < 0.0) || (d1 < 0.0 && d2 > 0.0))
-        && ((d3 > 0.0 && d4 < 0.0) || (d3 < 0.0 && d4 > 0.0))
-    {
-        return true;
-    }
-    let on = |p: &Point2, q: &Point2, r: &Point2| {
-        orient2d(p, q, r) == 0.0
-            && r.x >= p.x.min(q.x)
-            && r.x <= p.x.max(q.x)
-            && r.y >= p.y.min(q.y)
-            && r.y <= p.y.max(q.y)
-    };
-    on(a, b, c) || on(a, b, d) || on(c, d, a) || on(c, d, b)
-}
-
 /// Checks and orients an outline: distinct, finite, simple, counter-clockwise.
 pub fn clean_outline(outline: &[Point2]) -> Result<Vec<Point2>, PatternError> {
     if let Some(i) = outline
@@ -288,8 +254,8 @@ pub fn clean_outline(outline: &[Point2]) -> Result<Vec<Point2>, PatternError> {
             }
         }
     }
-    let a2 = crate::fit::section::signed_area2(&p);
-    let per = crate::fit::section::perimeter(&p);
+    let a2 = crate::geom::signed_area2(&p);
+    let per = crate::geom::perimeter(&p);
     if a2.abs() <= 1e-12 * per * per {
         return Err(PatternError::ZeroArea);
     }
@@ -315,7 +281,7 @@ fn sample_loop(poly: &[Point2], h: f64, flat: &mut Vec<Point2>) -> Vec<u32> {
 }
 
 fn inside(poly: &[Point2], q: &Point2) -> bool {
-    crate::fit::scan::contains(poly, q)
+    crate::geom::contains(poly, q)
 }
 
 fn distance_to_outline(poly: &[Point2], q: &Point2) -> f64 {
@@ -735,7 +701,7 @@ mod tests {
             &Pins::default(),
         )
         .unwrap();
-        let hole_area = 0.5 * crate::fit::section::signed_area2(&hole);
+        let hole_area = 0.5 * crate::geom::signed_area2(&hole);
         assert!((p.area - (1.0 - hole_area)).abs() < 1e-9, "{}", p.area);
         let mass: f64 = p.mass.iter().sum();
         assert!((mass - f.density * p.area).abs() < 1e-9 * mass);
@@ -747,7 +713,7 @@ mod tests {
                     + p.flat[t[2] as usize].coords)
                     / 3.0,
             );
-            assert!(!crate::fit::scan::contains(&hole, &c), "{c:?}");
+            assert!(!crate::geom::contains(&hole, &c), "{c:?}");
         }
         // Two boundary loops: every edge used by one triangle is on the outline or the hole.
         let mut count: HashMap<(u32, u32), u32> = HashMap::new();
@@ -770,7 +736,7 @@ mod tests {
             .iter()
             .filter(|(a, b)| on_hole(*a) && on_hole(*b))
             .count();
-        let hole_len = crate::fit::section::perimeter(&hole);
+        let hole_len = crate::geom::perimeter(&hole);
         assert!(
             inner as f64 >= hole_len / 0.02,
             "{inner} edges round the hole"

@@ -43,18 +43,7 @@ impl Default for ScanOptions {
 /// Default band, as fractions of the body's height.
 pub const DEFAULT_BAND: (f64, f64) = (0.48, 0.74);
 
-/// Whether `p` is inside the closed polygon (even-odd rule).
-pub fn contains(poly: &[Point2], p: &Point2) -> bool {
-    let mut inside = false;
-    let n = poly.len();
-    for i in 0..n {
-        let (a, b) = (poly[i], poly[(i + 1) % n]);
-        if (a.y > p.y) != (b.y > p.y) && p.x < a.x + (p.y - a.y) / (b.y - a.y) * (b.x - a.x) {
-            inside = !inside;
-        }
-    }
-    inside
-}
+pub use crate::geom::contains;
 
 /// The torso sections of a Z-up body mesh, and the band `(from, to)` they span.
 pub fn torso_sections(

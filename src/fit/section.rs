@@ -26,24 +26,7 @@ pub struct Section {
     pub points: Vec<Point2>,
 }
 
-/// Twice the signed area (positive counter-clockwise).
-pub fn signed_area2(p: &[Point2]) -> f64 {
-    let n = p.len();
-    let o = p[0];
-    (0..n)
-        .map(|i| {
-            let (a, b) = (p[i] - o, p[(i + 1) % n] - o);
-            a.x * b.y - a.y * b.x
-        })
-        .sum()
-}
-
-/// Perimeter of the closed polygon.
-pub fn perimeter(p: &[Point2]) -> f64 {
-    (0..p.len())
-        .map(|i| (p[(i + 1) % p.len()] - p[i]).norm())
-        .sum()
-}
+pub use crate::geom::{perimeter, signed_area2};
 
 /// Area centroid of the closed polygon.
 pub fn centroid(p: &[Point2]) -> Point2 {

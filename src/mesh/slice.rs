@@ -185,10 +185,7 @@ mod tests {
                 assert!(d <= r + 1e-12 && d > r * 0.99, "h={h} d={d} r={r}");
             }
             let xy = l.xy();
-            assert!(
-                crate::fit::section::signed_area2(&xy) > 0.0,
-                "counter-clockwise"
-            );
+            assert!(crate::geom::signed_area2(&xy) > 0.0, "counter-clockwise");
             // Vertices sit on the sphere, so the section runs on chords just inside the circle.
             let g = girth(&xy);
             assert!(

@@ -1,0 +1,88 @@
+//! Plane geometry shared by the pattern pieces (`cloth`), the fitter (`fit`) and the slicer
+//! (`mesh::slice`): closed polygons of [`Point2`] (the closing point not repeated) and
+//! segments.
+//!
+//! * `signed_area2`: twice the signed area, `sum (p_i - p_0) x (p_(i+1) - p_0)` (positive
+//!   counter-clockwise);
+//! * `perimeter`: the sum of the edge lengths;
+//! * `contains`: the even-odd rule (a horizontal ray's crossings);
+//! * `segments_meet`: whether two segments cross or touch, from the signs of `orient2d`;
+//! * `segment_distance`: the distance to the segment's nearest point.
+//!
+//! ```
+//! use drapekit::geom::{contains, perimeter, signed_area2};
+//! use drapekit::math::Point2;
+//! let sq = [Point2::new(0.0, 0.0), Point2::new(2.0, 0.0), Point2::new(2.0, 2.0), Point2::new(0.0, 2.0)];
+//! assert_eq!(signed_area2(&sq), 8.0);
+//! assert_eq!(perimeter(&sq), 8.0);
+//! assert!(contains(&sq, &Point2::new(1.0, 1.0)) && !contains(&sq, &Point2::new(3.0, 1.0)));
+//! ```
+
+use crate::math::{orient2d, Point2};
+
+/// Twice the signed area (positive counter-clockwise).
+pub fn signed_area2(p: &[Point2]) -> f64 {
+    let n = p.len();
+    let o = p[0];
+    (0..n)
+        .map(|i| {
+            let (a, b) = (p[i] - o, p[(i + 1) % n] - o);
+            a.x * b.y - a.y * b.x
+        })
+        .sum()
+}
+
+/// Perimeter of the closed polygon.
+pub fn perimeter(p: &[Point2]) -> f64 {
+    (0..p.len())
+        .map(|i| (p[(i + 1) % p.len()] - p[i]).norm())
+        .sum()
+}
+
+/// Whether `p` is inside the closed polygon (even-odd rule).
+pub fn contains(poly: &[Point2], p: &Point2) -> bool {
+    let mut inside = false;
+    let n = poly.len();
+    for i in 0..n {
+        let (a, b) = (poly[i], poly[(i + 1) % n]);
+        if (a.y > p.y) != (b.y > p.y) && p.x < a.x + (p.y - a.y) / (b.y - a.y) * (b.x - a.x) {
+            inside = !inside;
+        }
+    }
+    inside
+}
+
+/// Distance from `p` to the segment `a b`.
+pub fn segment_distance(p: &Point2, a: &Point2, b: &Point2) -> f64 {
+    let d = b - a;
+    let l2 = d.norm_squared();
+    let t = if l2 > 0.0 {
+        ((p - a).dot(&d) / l2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (p - (a + d * t)).norm()
+}
+
+/// Whether segments (a, b) and (c, d) cross or touch, beyond shared endpoints.
+pub fn segments_meet(a: &Point2, b: &Point2, c: &Point2, d: &Point2) -> bool {
+    let (d1, d2, d3, d4) = (
+        orient2d(a, b, c),
+        orient2d(a, b, d),
+        orient2d(c, d, a),
+        orient2d(c, d, b),
+    );
+    if ((d1 > 0.0 && d2 < 0.0) || (d1 < 0.0 && d2 > 0.0))
+        && ((d3 > 0.0 && d4 < 0.0) || (d3 < 0.0 && d4 > 0.0))
+    {
+        return true;
+    }
+    let on = |p: &Point2, q: &Point2, r: &Point2| {
+        orient2d(p, q, r) == 0.0
+            && r.x >= p.x.min(q.x)
+            && r.x <= p.x.max(q.x)
+            && r.y >= p.y.min(q.y)
+            && r.y <= p.y.max(q.y)
+    };
+    on(a, b, c) || on(a, b, d) || on(c, d, a) || on(c, d, b)
+}
