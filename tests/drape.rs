@@ -1243,6 +1243,16 @@ b = {{ piece = "right", from = [-0.1, 0.1], to = [-0.1, -0.1] }}
     };
     std::fs::write(dir.join("seam.toml"), text("[0.1, -0.1]")).unwrap();
     let sc = scene::read(&dir.join("seam.toml")).unwrap();
+    // Sewn as laid out: each pair starts at one height, across the 4 cm gap (the sides run
+    // opposite ways round their outlines).
+    let w0 = sim::load(&sc).unwrap();
+    for s in w0.model.springs.iter().filter(|s| s.rest == 0.0) {
+        let (a, b) = (w0.state.x[s.a as usize], w0.state.x[s.b as usize]);
+        assert!(
+            (a.y - b.y).abs() < 1e-9 && (b.x - a.x - 0.04).abs() < 1e-9,
+            "{a} {b}"
+        );
+    }
     let (w, _) = simulate(&sc);
     let seams: Vec<_> = w
         .model
