@@ -84,6 +84,15 @@ fn ribbon_variant(dir: &std::path::Path, edits: &[(&str, &str)], tail: &str) -> 
 /// The ribbon's stopping rule.
 const RIBBON_STOP: &str = "until_rest = 1e-9            # J\nmax_steps = 400000";
 
+/// Copies the validation sphere into `dir`, for scenes written there.
+fn beside_sphere(dir: &std::path::Path) {
+    std::fs::copy(
+        common::fixture("scenes/sphere_r0.3.obj"),
+        dir.join("sphere_r0.3.obj"),
+    )
+    .unwrap();
+}
+
 /// A scratch directory, removed when dropped.
 fn scratch(name: &str) -> tempfile::TempDir {
     tempfile::Builder::new()
@@ -819,11 +828,7 @@ fn refused_with(name: &str, text: &str, files: &[(&str, &str)], needles: &[&str]
     for (f, content) in files {
         std::fs::write(dir.join(f), content).unwrap();
     }
-    std::fs::copy(
-        common::fixture("scenes/sphere_r0.3.obj"),
-        dir.join("sphere_r0.3.obj"),
-    )
-    .unwrap();
+    beside_sphere(dir);
     let scene = dir.join(format!("{name}.toml"));
     std::fs::write(&scene, text).unwrap();
     let out = dir.join("out");
@@ -857,11 +862,7 @@ fabric = "cotton"
 fn the_good_scene_of_the_bad_scene_tests_runs() {
     let tmp = scratch("good");
     let dir = tmp.path();
-    std::fs::copy(
-        common::fixture("scenes/sphere_r0.3.obj"),
-        dir.join("sphere_r0.3.obj"),
-    )
-    .unwrap();
+    beside_sphere(dir);
     std::fs::write(dir.join("good.toml"), GOOD).unwrap();
     let o = drape_cli(&dir.join("good.toml"), &dir.join("out"), &[]);
     assert!(o.status.success(), "{}", common::text(&o).1);
@@ -1182,11 +1183,7 @@ fn an_explicit_scene_without_dt_steps_just_under_its_stability_estimate() {
 fn a_scene_piece_with_a_hole_has_no_cloth_in_the_hole() {
     let tmp = scratch("hole");
     let dir = tmp.path();
-    std::fs::copy(
-        common::fixture("scenes/sphere_r0.3.obj"),
-        dir.join("sphere_r0.3.obj"),
-    )
-    .unwrap();
+    beside_sphere(dir);
     // A 20 cm square hole in the middle of the 80 cm square.
     let holed = GOOD.replace(
         "spacing = 0.05",
@@ -1278,4 +1275,30 @@ b = {{ piece = "right", from = [-0.1, 0.1], to = [-0.1, -0.1] }}
         &bad,
         &["seam[1].a", "not on the outline of piece 'left'"],
     );
+}
+
+#[test]
+fn a_frame_callback_that_reports_rest_ends_the_run_there() {
+    let tmp = scratch("frame-rest");
+    let dir = tmp.path();
+    beside_sphere(dir);
+    std::fs::write(dir.join("good.toml"), GOOD).unwrap();
+    let sc = scene::read(&dir.join("good.toml")).unwrap();
+    let mut w = sim::load(&sc).unwrap();
+    let mut seen = Vec::new();
+    let stats = sim::run(
+        &mut w,
+        &sc.solver,
+        sim::Stop::Steps(10),
+        Some(2),
+        &mut |step, _| {
+            seen.push(step);
+            Ok(step >= 4)
+        },
+        &|_| {},
+    )
+    .unwrap();
+    assert_eq!(seen, vec![2, 4]);
+    assert_eq!(stats.steps, 4);
+    assert!(stats.at_rest);
 }

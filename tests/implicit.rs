@@ -261,7 +261,7 @@ fn worst_strain_after(w: &mut World, settings: &SolverSettings, from: u64, steps
         if step > from {
             worst = worst.max(sim::strain(&w.model, &w.state.x).0);
         }
-        Ok(())
+        Ok(false)
     };
     sim::run(
         w,

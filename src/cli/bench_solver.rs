@@ -225,7 +225,7 @@ fn late_peak(settings: &SolverSettings) -> anyhow::Result<f64> {
                 let e = crate::cloth::forces::kinetic_energy(&w.model, &w.state.v);
                 peak.set(peak.get().max(e));
             }
-            Ok(())
+            Ok(false)
         },
         &|_| {},
     )?;

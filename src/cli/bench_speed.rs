@@ -246,7 +246,7 @@ pub fn run(a: SpeedBench) -> anyhow::Result<()> {
                     if step > half {
                         settled = settled.max(sim::strain(&w.model, &w.state.x).0);
                     }
-                    Ok(())
+                    Ok(false)
                 };
                 let st = if run + 1 == a.runs {
                     sim::run(&mut w, &s, stop, Some(1), &mut record, &|_| {})?

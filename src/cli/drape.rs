@@ -209,7 +209,7 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
     });
     let frames_dir = out.join("frames");
     let names: Vec<String> = sc.pieces.iter().map(|p| p.name.clone()).collect();
-    let mut frame = |step: u64, w: &World| -> Result<(), sim::SimError> {
+    let mut frame = |step: u64, w: &World| -> Result<bool, sim::SimError> {
         std::fs::create_dir_all(&frames_dir).map_err(|e| sim::SimError::Frame {
             step,
             message: e.to_string(),
@@ -228,7 +228,7 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
             })?;
             written.borrow_mut().push(p);
         }
-        Ok(())
+        Ok(false)
     };
     let progress = |step: u64| {
         if let Some(b) = &bar {

@@ -372,29 +372,38 @@ pub fn settle(
     let dt = settings.solver.dt;
     world.model.gravity = GRAVITY;
     set_seam_k(&mut world.model, seam_k);
+    // One run (the solver and its factorisation kept), the rest test at every frame.
     let frame = ((1.0 / 60.0 / dt).round() as u64).max(1);
+    let limit = REST_SPEED * frame as f64 * dt;
     let max_steps = ((settings.settle_max / dt).round() as u64).max(1);
-    let mut report = StageReport::default();
+    let mut before = world.state.x.clone();
     let mut quiet = 0;
-    while report.steps < max_steps {
-        let before = world.state.x.clone();
-        let stats = sim::run_quiet(world, &settings.solver, Stop::Steps(frame))?;
-        report.time += stats.time;
-        report.steps += stats.steps;
-        report.wall_seconds += stats.wall_seconds;
-        let moving = moved_fraction(&before, &world.state.x, REST_SPEED * stats.time);
+    let mut at_rest = |_: u64, w: &World| -> Result<bool, SimError> {
+        let moving = moved_fraction(&before, &w.state.x, limit);
+        before.clone_from(&w.state.x);
         quiet = if moving <= REST_FRACTION {
             quiet + 1
         } else {
             0
         };
-        if quiet >= REST_FRAMES {
-            report.done = true;
-            break;
-        }
-    }
-    report.seam_gap_max = seam_gaps(seams, &world.state.x).0;
-    Ok(report)
+        Ok(quiet >= REST_FRAMES)
+    };
+    let stats = sim::run(
+        world,
+        &settings.solver,
+        Stop::Steps(max_steps),
+        Some(frame),
+        &mut at_rest,
+        &|_| {},
+    )?;
+    Ok(StageReport {
+        time: stats.time,
+        steps: stats.steps,
+        wall_seconds: stats.wall_seconds,
+        seam_gap_max: seam_gaps(seams, &world.state.x).0,
+        done: stats.at_rest,
+        sew_weight: 0.0,
+    })
 }
 
 /// The fraction of particles that moved more than `limit` (m) from `before` to `after`.

@@ -469,14 +469,15 @@ pub fn collide(
     moved.into_inner().unwrap().sqrt()
 }
 
-/// Runs the world with `settings`. `frame(step, world)` is called every `frames` steps;
-/// `progress(step)` at every check.
+/// Runs the world with `settings`. `frame(step, world)` is called every `frames` steps; when
+/// it returns `true` the cloth is at rest and the run ends there. `progress(step)` at every
+/// check.
 pub fn run(
     world: &mut World,
     settings: &SolverSettings,
     stop: Stop,
     frames: Option<u64>,
-    frame: &mut dyn FnMut(u64, &World) -> Result<(), SimError>,
+    frame: &mut dyn FnMut(u64, &World) -> Result<bool, SimError>,
     progress: &dyn Fn(u64),
 ) -> Result<RunStats, SimError> {
     let start = Instant::now();
@@ -597,8 +598,9 @@ pub fn run(
             }
         }
         if let Some(k) = frames {
-            if step % k == 0 {
-                frame(step, world)?;
+            if step % k == 0 && frame(step, world)? {
+                stats.at_rest = true;
+                break;
             }
         }
     }
@@ -614,7 +616,7 @@ pub fn run_quiet(
     settings: &SolverSettings,
     stop: Stop,
 ) -> Result<RunStats, SimError> {
-    run(world, settings, stop, None, &mut |_, _| Ok(()), &|_| {})
+    run(world, settings, stop, None, &mut |_, _| Ok(false), &|_| {})
 }
 
 /// A fabric's largest stable step at a spacing, for a lone flat square piece (the README's
