@@ -96,7 +96,8 @@ pub struct GarmentReport {
     pub sew: StageReport,
     /// Stage 2.
     pub drape: StageReport,
-    /// Fraction of particles moving more than 0.3 mm in the last 1/60 s.
+    /// Fraction of particles that moved more than 0.3 mm over the drape's last 1/60 s (1 when
+    /// the drape was shorter than a frame).
     pub moving_fraction: f64,
     /// The whole garment's measures.
     pub garment: Measures,
@@ -327,11 +328,12 @@ pub fn run(args: GarmentArgs) -> anyhow::Result<()> {
             eprint!("\rsewing: {t:.2} s simulated");
         }
     };
-    let mut g = gd::sew_and_drape(&pattern, body, &settings, &progress)?;
+    let g = gd::sew_and_drape(&pattern, body, &settings, &progress)?;
     if super::interactive() {
         eprintln!();
     }
-    let moving = gd::moving_fraction(&mut g.world, &settings.solver)?;
+    // The drape's last frame (1/60 s); a drape too short for one frame counts as moving.
+    let moving = g.drape.moving_fraction.unwrap_or(1.0);
     let c = &g.world.colliders[0];
     let inside: Vec<bool> = if c.closed {
         g.world.state.x.iter().map(|p| sim::inside(c, p)).collect()

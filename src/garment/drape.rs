@@ -154,6 +154,11 @@ pub struct StageReport {
     pub done: bool,
     /// Sewing: the seams' weight at the end, in mean `m / h^2` (0 for the drape).
     pub sew_weight: f64,
+    /// Drape: the fraction of particles that moved more than [`REST_SPEED`] times 1/60 s over
+    /// the last frame of 1/60 s (the verdict's test, measured in the run itself: a new run
+    /// would rebuild the solver, whose contact weights start afresh, and jolt the cloth);
+    /// `None` for sewing, or for a drape shorter than a frame.
+    pub moving_fraction: Option<f64>,
 }
 
 /// A sewn and draped garment.
@@ -377,10 +382,11 @@ pub fn settle(
     let limit = REST_SPEED * frame as f64 * dt;
     let max_steps = ((settings.settle_max / dt).round() as u64).max(1);
     let mut before = world.state.x.clone();
-    let mut quiet = 0;
+    let (mut quiet, mut last) = (0, None);
     let mut at_rest = |_: u64, w: &World| -> Result<bool, SimError> {
         let moving = moved_fraction(&before, &w.state.x, limit);
         before.clone_from(&w.state.x);
+        last = Some(moving);
         quiet = if moving <= REST_FRACTION {
             quiet + 1
         } else {
@@ -403,6 +409,7 @@ pub fn settle(
         seam_gap_max: seam_gaps(seams, &world.state.x).0,
         done: stats.at_rest,
         sew_weight: 0.0,
+        moving_fraction: last,
     })
 }
 
@@ -432,19 +439,6 @@ pub fn sew_and_drape(
         sew: sew_report,
         drape,
     })
-}
-
-/// The fraction of particles that move more than `REST_SPEED / 60` (0.3 mm) in the next
-/// 1/60 s: the reference pipeline's test of rest. Runs that 1/60 s on `world`.
-pub fn moving_fraction(world: &mut World, settings: &SolverSettings) -> Result<f64, SimError> {
-    let before: Vec<Point3> = world.state.x.clone();
-    let steps = ((1.0 / 60.0 / settings.dt).round() as u64).max(1);
-    let stats = sim::run_quiet(world, settings, Stop::Steps(steps))?;
-    Ok(moved_fraction(
-        &before,
-        &world.state.x,
-        REST_SPEED * stats.time,
-    ))
 }
 
 #[cfg(test)]
