@@ -48,7 +48,8 @@
 
 use crate::cloth::fabric::{Fabric, Kes};
 use crate::cloth::integrate::{Integrator, SolverSettings};
-use crate::cloth::pattern::Pins;
+use crate::cloth::pattern::{self, Pins};
+use crate::collide::grid::MAX_CELLS;
 use crate::math::{Point2, Vec3};
 use crate::mesh::transform::{Units, Up};
 use crate::sim::settings::{Cells, Stop};
@@ -372,6 +373,11 @@ pub struct Scene {
 /// highest frequency) an explicit integrator steps at when the scene gives no `dt`.
 pub const EXPLICIT_STEP_FRACTION: f64 = 0.9;
 
+/// The most steps a run may take, whether given (`solver.steps`, `solver.max_steps`) or counted
+/// (`solver.duration / solver.dt`): 10^8 steps take days even for a small cloth, and a count from
+/// a tiny `dt` would otherwise run for ever.
+pub const MAX_STEPS: u64 = 100_000_000;
+
 /// The most steps a scene without `dt` may be given by [`Scene::choose_step`]; beyond, the
 /// integrator is the wrong one for the fabric and the spacing.
 pub const MAX_CHOSEN_STEPS: u64 = 50_000_000;
@@ -567,11 +573,21 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
         (Some(n), None, None) => {
             if n == 0 {
                 bad("solver.steps", "must be at least 1".into());
+            } else if n > MAX_STEPS {
+                bad("solver.steps", format!("{n} steps: at most {MAX_STEPS}"));
             }
-            Stop::Steps(n.max(1))
+            Stop::Steps(n.clamp(1, MAX_STEPS))
         }
         (None, Some(t), None) => {
-            Stop::Steps((positive("solver.duration", t, dt) / dt).round().max(1.0) as u64)
+            let t = positive("solver.duration", t, dt);
+            let steps = (t / dt).round().max(1.0);
+            if steps > MAX_STEPS as f64 {
+                bad(
+                    "solver.duration",
+                    format!("{t} s at solver.dt = {dt:e} s is {steps:.3e} steps: at most {MAX_STEPS}; give a larger solver.dt or a shorter solver.duration"),
+                );
+            }
+            Stop::Steps(steps.min(MAX_STEPS as f64) as u64)
         }
         (None, None, Some(e)) => {
             if !(e.is_finite() && e >= 0.0) {
@@ -582,7 +598,7 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
             }
             Stop::UntilRest {
                 energy: e,
-                max_steps: s.max_steps.unwrap_or(1_000_000).max(1),
+                max_steps: s.max_steps.unwrap_or(1_000_000).clamp(1, MAX_STEPS),
             }
         }
         _ => {
@@ -596,6 +612,12 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
     if s.max_steps.is_some() && s.until_rest.is_none() {
         bad("solver.max_steps", "goes with until_rest".into());
     }
+    if let Some(n) = s.max_steps.filter(|&n| n > MAX_STEPS) {
+        bad(
+            "solver.max_steps",
+            format!("{n} steps: at most {MAX_STEPS}"),
+        );
+    }
     let cells = match f.collision.and_then(|c| c.cells) {
         None => Cells::Auto,
         Some(CellsFile::Word(w)) if w == "auto" => Cells::Auto,
@@ -606,14 +628,24 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
             );
             Cells::Auto
         }
-        Some(CellsFile::Dims(d)) if d.iter().all(|&n| (1..=4096).contains(&n)) => Cells::Fixed(d),
-        Some(CellsFile::Dims(d)) => {
+        Some(CellsFile::Dims(d)) if !d.iter().all(|&n| (1..=4096).contains(&n)) => {
             bad(
                 "collision.cells",
                 format!("{d:?}: each count must be within 1..4096"),
             );
             Cells::Auto
         }
+        Some(CellsFile::Dims(d)) if d.iter().product::<usize>() > MAX_CELLS => {
+            bad(
+                "collision.cells",
+                format!(
+                    "{d:?} is {} cells: at most {MAX_CELLS} (2^24; each cell takes memory before any face is listed)",
+                    d.iter().product::<usize>()
+                ),
+            );
+            Cells::Auto
+        }
+        Some(CellsFile::Dims(d)) => Cells::Fixed(d),
     };
     let dir = path.parent().unwrap_or(Path::new("."));
     let mut objects = Vec::new();
@@ -743,6 +775,8 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
                 &k("outline"),
                 format!("a polygon needs at least 3 points, got {}", outline.len()),
             );
+        } else if let Err(e) = pattern::check_particle_count(&outline, spacing) {
+            bad(&k("spacing"), e.to_string());
         }
         let holes: Vec<Vec<Point2>> = p
             .holes

@@ -395,3 +395,34 @@ fn garment_flags_out_of_range_are_refused_before_any_work() {
         assert!(listing(dir.path()).is_empty(), "{flag}: nothing written");
     }
 }
+
+/// An ASCII PLY of one triangle whose face list is `face` (its vertex indices typed `float`)
+/// and whose vertices are typed `float`, with `x0` as the first coordinate.
+fn float_ply(x0: &str, face: &str) -> Vec<u8> {
+    format!("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar float vertex_indices\nend_header\n{x0} 0 0\n1 0 0\n0 1 0\n{face}\n").into_bytes()
+}
+
+#[test]
+fn hostile_ply_face_indices_must_be_integers() {
+    for (name, face, value) in [
+        ("fi.ply", "3 0 1.7 2", "1.7"),
+        ("fn.ply", "3 0 1 nan", "NaN"),
+    ] {
+        assert_refused(
+            name,
+            &float_ply("0", face),
+            &[&format!(
+                "{name}:13: element 'face' 0: vertex index {value} is not a whole number: expected an integer"
+            )],
+        );
+    }
+}
+
+#[test]
+fn hostile_ply_float_coordinate_beyond_f32_is_refused() {
+    assert_refused(
+        "big.ply",
+        &float_ply("1e39", "3 0 1 2"),
+        &["big.ply:10: coordinate 1e39 does not fit the declared type float (at most 3.4028234663852886e38 in magnitude)"],
+    );
+}

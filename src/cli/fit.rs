@@ -1,6 +1,6 @@
 //! `drapekit fit`: a mannequin from sections, measurements or a scan.
 
-use crate::fit::fitter::{fit_sections, section_targets, FitOptions, FitReport, GirthTarget};
+use crate::fit::fitter::{self, fit_sections, section_targets, FitOptions, FitReport, GirthTarget};
 use crate::fit::scan::{torso_sections, ScanOptions};
 use crate::fit::{input, measurements, FitError};
 use crate::io::{self, Format, ReadOptions, WriteOptions};
@@ -221,6 +221,16 @@ pub fn run(args: FitArgs) -> anyhow::Result<()> {
     if args.from_mesh.is_none() && (args.from.is_some() || args.to.is_some()) {
         anyhow::bail!("--from and --to set the slicing band of --from-mesh");
     }
+    if let Some(levels) = args.levels {
+        fitter::check_count("--levels", levels, fitter::MAX_LEVELS, "sections")?;
+    }
+    FitOptions {
+        nodes_around: args.nodes,
+        around: args.around,
+        along: args.along,
+        ..FitOptions::default()
+    }
+    .check_counts()?;
     let src = load(&args)?;
     let tolerance = args
         .tolerance

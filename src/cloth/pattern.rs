@@ -49,6 +49,11 @@ pub const BAND_THREAD_COS: f64 = 0.923_879_532_511_286_7;
 /// Grid corners closer than this many spacings to the outline are not kept.
 pub const CLEARANCE: f64 = 0.4;
 
+/// The most particles a piece may have, estimated before anything is built (outline area over
+/// the squared spacing, plus the outline's samples): building a piece of a million particles
+/// takes seconds and about a gigabyte, and each step of the run costs as much again.
+pub const MAX_PARTICLES: usize = 1_000_000;
+
 pub use super::elements::{Bend, Spring, SpringKind};
 
 /// Cotangent weights above this mark a sliver triangle; its node gets no bending element.
@@ -198,6 +203,14 @@ pub enum PatternError {
     /// A bad spacing.
     #[error("spacing {spacing} must be a positive number")]
     Spacing { spacing: f64 },
+    /// Too many particles, estimated from the outline's area before the grid is built.
+    #[error("spacing {spacing} m over an outline of {area:.4e} m^2 gives about {estimate} particles; at most {limit}: use a larger spacing")]
+    TooManyParticles {
+        spacing: f64,
+        area: f64,
+        estimate: f64,
+        limit: usize,
+    },
     /// Too many particles.
     #[error("spacing {spacing} gives {count} grid nodes over the outline's box; at most 4,000,000: use a larger spacing")]
     TooFine { spacing: f64, count: usize },
@@ -332,6 +345,34 @@ pub fn build(
     build_with_holes(outline, &[], spacing, fabric, pins)
 }
 
+/// Refuses a spacing that is not a positive number, or that would give more than
+/// [`MAX_PARTICLES`] particles: the outline's area over `spacing^2` plus its perimeter over
+/// `spacing` (holes not subtracted), computed before anything is built.
+pub fn check_particle_count(outline: &[Point2], spacing: f64) -> Result<(), PatternError> {
+    if !(spacing.is_finite() && spacing > 0.0) {
+        return Err(PatternError::Spacing { spacing });
+    }
+    let n = outline.len();
+    let (mut twice_area, mut perimeter) = (0.0, 0.0);
+    for i in 0..n {
+        let (a, b) = (outline[i] / spacing, outline[(i + 1) % n] / spacing);
+        twice_area += a.x * b.y - a.y * b.x;
+        perimeter += (b - a).norm();
+    }
+    let estimate = 0.5 * twice_area.abs() + perimeter;
+    // A non-finite outline passes: the outline's own check names it.
+    let finite = outline.iter().all(|p| p.x.is_finite() && p.y.is_finite());
+    if finite && (estimate.is_nan() || estimate > MAX_PARTICLES as f64) {
+        return Err(PatternError::TooManyParticles {
+            spacing,
+            area: 0.5 * twice_area.abs() * spacing * spacing,
+            estimate: estimate.round(),
+            limit: MAX_PARTICLES,
+        });
+    }
+    Ok(())
+}
+
 /// [`build`] with `holes` cut out of the piece (`cloth::holes`).
 pub fn build_with_holes(
     outline: &[Point2],
@@ -340,9 +381,7 @@ pub fn build_with_holes(
     fabric: &Fabric,
     pins: &Pins,
 ) -> Result<Piece, PatternError> {
-    if !(spacing.is_finite() && spacing > 0.0) {
-        return Err(PatternError::Spacing { spacing });
-    }
+    check_particle_count(outline, spacing)?;
     let poly = clean_outline(outline)?;
     let cut = super::holes::check_holes(&poly, holes)?;
     let h = spacing;

@@ -10,6 +10,10 @@
 use crate::math::{Aabb, Point3, Vec3};
 use crate::mesh::TriMesh;
 
+/// The most cells a grid may have (2^24, about 16.8 million): its cell table alone takes 4 bytes
+/// a cell (64 MiB) before any face is listed. `collision.cells` of a scene is checked against it.
+pub const MAX_CELLS: usize = 1 << 24;
+
 /// A uniform grid of face lists.
 #[derive(Debug, Clone)]
 pub struct Grid {

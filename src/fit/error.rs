@@ -73,6 +73,14 @@ pub enum FitError {
     /// A mesh could not be read.
     #[error(transparent)]
     Mesh(#[from] crate::io::IoError),
+    /// A count from a flag or a file above what the fit may allocate.
+    #[error("{flag} {value}: at most {limit} {what}")]
+    TooLarge {
+        flag: String,
+        value: u64,
+        limit: u64,
+        what: String,
+    },
     /// Options that cannot work together.
     #[error("{0}")]
     Options(String),

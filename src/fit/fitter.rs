@@ -33,6 +33,35 @@ use crate::mesh::TriMesh;
 use realfft::RealFftPlanner;
 use serde::Serialize;
 
+/// The most nodes around a section (`--nodes`): each section is resampled to this many points
+/// and sampled at four times as many for the error estimate.
+pub const MAX_NODES_AROUND: usize = 1 << 16;
+
+/// The most node points in all (nodes around times sections used): the fit holds a complex
+/// coefficient (16 bytes) and more per node, 2^24 of them about 270 MB each.
+pub const MAX_NODE_POINTS: usize = 1 << 24;
+
+/// The most vertices of the output form (`--around` times `--along`): 2^24 vertices take about
+/// 400 MB and their triangles 800 MB more.
+pub const MAX_OUTPUT_VERTICES: usize = 1 << 24;
+
+/// The most sections a scan is sliced into or a measurement model gives (`--levels`): each
+/// level of a scan slices the whole mesh.
+pub const MAX_LEVELS: usize = 10_000;
+
+/// Refuses `count` (given by `flag`) above `limit`, before anything is allocated for it.
+pub fn check_count(flag: &str, count: usize, limit: usize, what: &str) -> Result<(), FitError> {
+    if count > limit {
+        return Err(FitError::TooLarge {
+            flag: flag.to_string(),
+            value: count as u64,
+            limit: limit as u64,
+            what: what.to_string(),
+        });
+    }
+    Ok(())
+}
+
 /// How to fit and tessellate. `Default` gives the documented defaults.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FitOptions {
@@ -51,6 +80,24 @@ pub struct FitOptions {
     pub caps: bool,
     /// Choose nodes and order for this largest error, in input units (default none).
     pub tolerance: Option<f64>,
+}
+
+impl FitOptions {
+    /// Refuses counts above [`MAX_NODES_AROUND`] and [`MAX_OUTPUT_VERTICES`], naming the flag.
+    pub fn check_counts(&self) -> Result<(), FitError> {
+        check_count(
+            "--nodes",
+            self.nodes_around,
+            MAX_NODES_AROUND,
+            "nodes around each section",
+        )?;
+        check_count(
+            "--around x --along",
+            self.around.saturating_mul(self.along),
+            MAX_OUTPUT_VERTICES,
+            "vertices of the form",
+        )
+    }
 }
 
 impl Default for FitOptions {
@@ -276,6 +323,7 @@ pub fn fit_sections(
             "nodes around and points around must be at least 3, rings along at least 2".into(),
         ));
     }
+    opts.check_counts()?;
     if opts.lanczos > lanczos::MAX_ORDER {
         return Err(FitError::Options(format!(
             "Lanczos order {} is not supported: use 0, 1 or 2",
@@ -308,6 +356,19 @@ pub fn fit_sections(
     if k < 3 {
         return Err(FitError::TooFewSections { found: k });
     }
+    check_count(
+        "--nodes x sections",
+        n.saturating_mul(k),
+        MAX_NODE_POINTS,
+        "node points (nodes around times sections used; use --stride or fewer --nodes)",
+    )?;
+    check_count(
+        "--around x rings",
+        opts.around
+            .saturating_mul((k - 1) * (opts.along.max(2) - 1).div_ceil(k - 1) + 1),
+        MAX_OUTPUT_VERTICES,
+        "vertices of the form (--along is rounded up to a multiple of the sections)",
+    )?;
     let m = lanczos::order_for(k, m_req);
     if m < m_req {
         warnings.push(format!(

@@ -60,6 +60,25 @@ pub struct SectionNotes {
 }
 
 /// Validates, cleans, orients and sorts sections (see the module docs). Section numbers in
+/// Twice the signed area of a ring, and its absolute value over the squared perimeter. The
+/// ratio is computed on the points moved to the first one, halved and scaled by a power of two
+/// (`mesh::clean::unit_scale`), so coordinates of 1e200 do not make it overflow (nor 1e-200
+/// underflow) into a false "collinear".
+fn area_and_flatness(points: &[Point2]) -> (f64, f64) {
+    let p0 = points[0];
+    let extent = points
+        .iter()
+        .map(|p| (p * 0.5 - p0 * 0.5).amax())
+        .fold(0.0, f64::max);
+    let s = crate::mesh::clean::unit_scale(extent);
+    let unit: Vec<Point2> = points
+        .iter()
+        .map(|p| Point2::from((p * 0.5 - p0 * 0.5) * s))
+        .collect();
+    let (a2, per) = (signed_area2(&unit), perimeter(&unit));
+    (a2 * 4.0 / (s * s), a2.abs() / (per * per))
+}
+
 /// errors count from 1 in the order given.
 pub fn normalize(sections: Vec<Section>) -> Result<(Vec<Section>, SectionNotes), FitError> {
     let mut notes = SectionNotes::default();
@@ -95,9 +114,8 @@ pub fn normalize(sections: Vec<Section>) -> Result<(Vec<Section>, SectionNotes),
                 found: s.points.len(),
             });
         }
-        let a2 = signed_area2(&s.points);
-        let per = perimeter(&s.points);
-        if a2.abs() <= 1e-9 * per * per {
+        let (a2, relative) = area_and_flatness(&s.points);
+        if relative <= 1e-9 {
             return Err(FitError::Degenerate {
                 section: no,
                 height: s.height,

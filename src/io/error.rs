@@ -124,6 +124,25 @@ pub enum ProblemKind {
     /// A negative list length.
     #[error("list length {count} is negative")]
     NegativeCount { count: i64 },
+    /// A PLY list length or face index that is not a whole number.
+    #[error(
+        "element '{element}' {index}: {what} {value} is not a whole number: expected an integer"
+    )]
+    PlyNotInteger {
+        element: String,
+        index: u64,
+        what: &'static str,
+        value: f64,
+    },
+    /// A coordinate beyond the range of its declared PLY type.
+    #[error(
+        "coordinate {value:e} does not fit the declared type {ty} (at most {max:e} in magnitude)"
+    )]
+    PlyFloatRange {
+        value: f64,
+        ty: &'static str,
+        max: f64,
+    },
     /// A value out of range for its integer type.
     #[error("'{token}' is not a valid {ty}")]
     BadInteger { token: String, ty: String },

@@ -24,7 +24,7 @@ use crate::mesh::polygon::{PolygonStats, QuadSplit};
 use crate::mesh::TriMesh;
 use serde::Serialize;
 use std::fmt;
-use std::io::{BufWriter, Write};
+use std::io::{BufWriter, Read, Write};
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
 
@@ -83,10 +83,15 @@ impl Format {
 
     /// The format the content shows, if it is unmistakable.
     pub fn sniff(bytes: &[u8]) -> Option<Format> {
+        Format::sniff_head(bytes, bytes.len() as u64)
+    }
+
+    /// The format shown by `bytes`, the start of a file of `len` bytes.
+    pub fn sniff_head(bytes: &[u8], len: u64) -> Option<Format> {
         if bytes.starts_with(b"ply\n") || bytes.starts_with(b"ply\r\n") {
             return Some(Format::Ply);
         }
-        if stl::is_binary(bytes) {
+        if stl::is_binary_len(bytes, len) {
             return Some(Format::Stl);
         }
         let decoded = text::decode(bytes).ok()?;
@@ -158,13 +163,47 @@ pub struct ReadOutput {
     pub info: ReadInfo,
 }
 
-/// Reads a mesh file.
+/// Bytes read from the start of a file to tell its format (sniffing reads up to 1000 lines).
+const SNIFF_BYTES: u64 = 1 << 20;
+
+/// Reads a mesh file. OBJ and vertex triples in UTF-8 are read line by line from the file
+/// (memory grows with the mesh, not the file); other files are read whole.
 pub fn read_mesh(path: &Path, opts: &ReadOptions) -> Result<ReadOutput, IoError> {
-    let bytes = std::fs::read(path).map_err(|source| IoError::Read {
+    let rerr = |source| IoError::Read {
         path: path.to_path_buf(),
         source,
-    })?;
-    read_bytes(path, &bytes, opts)
+    };
+    let file = std::fs::File::open(path).map_err(rerr)?;
+    let len = file.metadata().map_err(rerr)?.len();
+    let mut reader = std::io::BufReader::with_capacity(1 << 16, file);
+    let mut head = Vec::new();
+    (&mut reader)
+        .take(SNIFF_BYTES)
+        .read_to_end(&mut head)
+        .map_err(rerr)?;
+    if (head.len() as u64) < SNIFF_BYTES {
+        return read_bytes(path, &head, opts);
+    }
+    let (format, note) = choose_format(path, opts, Format::sniff_head(&head, len))?;
+    let utf8 = matches!(text::decode(&head), Ok(std::borrow::Cow::Borrowed(_)));
+    if !(utf8 && matches!(format, Format::Obj | Format::Triples)) {
+        reader.read_to_end(&mut head).map_err(rerr)?;
+        return read_bytes(path, &head, opts);
+    }
+    let bom = if head.starts_with(&[0xEF, 0xBB, 0xBF]) {
+        3
+    } else {
+        0
+    };
+    let stream = std::io::Cursor::new(&head[bom..]).chain(reader);
+    let mut out = match format {
+        Format::Obj => obj::read_from(path, stream, opts),
+        _ => triples::read_from(path, stream, opts),
+    }?;
+    if let Some(n) = note {
+        out.info.warnings.insert(0, n);
+    }
+    Ok(out)
 }
 
 /// Reads a mesh from bytes; `path` names it in messages and its extension may tell the format.
@@ -174,24 +213,7 @@ pub fn read_bytes(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<ReadO
             path: path.to_path_buf(),
         });
     }
-    let sniffed = Format::sniff(bytes);
-    let mut note = None;
-    let format = match (opts.format, Format::from_path(path), sniffed) {
-        (Some(f), _, _) => f,
-        // Content that is unmistakably PLY or STL wins over a misleading extension.
-        (None, Some(ext), Some(s)) if ext != s && matches!(s, Format::Ply | Format::Stl) => {
-            note = Some(format!("the extension says {ext} but the content is {s}: read as {s}"));
-            s
-        }
-        (None, Some(ext), _) => ext,
-        (None, None, Some(s)) => s,
-        (None, None, None) => {
-            return Err(IoError::UnknownFormat {
-                path: path.to_path_buf(),
-                reason: "the extension is not .txt/.tri/.obj/.stl/.ply and the content is none of vertex triples, OBJ, STL or PLY".into(),
-            })
-        }
-    };
+    let (format, note) = choose_format(path, opts, Format::sniff(bytes))?;
     let mut out = match format {
         Format::Triples => triples::read(path, bytes, opts),
         Format::Obj => obj::read(path, bytes, opts),
@@ -202,6 +224,33 @@ pub fn read_bytes(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<ReadO
         out.info.warnings.insert(0, n);
     }
     Ok(out)
+}
+
+/// The format to read: `--from`, else the extension, else what the content shows (`sniffed`),
+/// with a note when the content overrules the extension.
+fn choose_format(
+    path: &Path,
+    opts: &ReadOptions,
+    sniffed: Option<Format>,
+) -> Result<(Format, Option<String>), IoError> {
+    Ok(match (opts.format, Format::from_path(path), sniffed) {
+        (Some(f), _, _) => (f, None),
+        // Content that is unmistakably PLY or STL wins over a misleading extension.
+        (None, Some(ext), Some(s)) if ext != s && matches!(s, Format::Ply | Format::Stl) => (
+            s,
+            Some(format!(
+                "the extension says {ext} but the content is {s}: read as {s}"
+            )),
+        ),
+        (None, Some(ext), _) => (ext, None),
+        (None, None, Some(s)) => (s, None),
+        (None, None, None) => {
+            return Err(IoError::UnknownFormat {
+                path: path.to_path_buf(),
+                reason: "the extension is not .txt/.tri/.obj/.stl/.ply and the content is none of vertex triples, OBJ, STL or PLY".into(),
+            })
+        }
+    })
 }
 
 /// Refuses meshes whose vertex count does not fit 32-bit indices.

@@ -11,14 +11,14 @@
 //!
 //! Written: `v x y z` with each number in its shortest exact form, then `f a b c` (1-based).
 
-use super::error::{IoError, Location, ProblemKind, Problems};
+use super::error::{IoError, ProblemKind, Problems};
 use super::text::{self, show, words};
 use super::{ReadInfo, ReadOptions, ReadOutput};
 use crate::math::Point3;
 use crate::mesh::polygon::Polygons;
 use crate::mesh::TriMesh;
 use std::collections::BTreeMap;
-use std::io::Write;
+use std::io::{BufRead, Write};
 use std::path::Path;
 
 const FORMAT: &str = "OBJ";
@@ -51,108 +51,75 @@ const FREEFORM: &[&[u8]] = &[
 
 /// Reads OBJ from `bytes` (`path` names the file in messages).
 pub fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<ReadOutput, IoError> {
-    let text = text::decode(bytes).map_err(|reason| {
-        super::error::malformed(
-            path,
-            FORMAT,
-            Location::File,
-            ProblemKind::Encoding { reason },
-        )
-    })?;
-    let mut problems = Problems::default();
-    let mut positions: Vec<Point3> = Vec::new();
-    // Faces: corner indices (0-based, maybe past the end until checked) and their lines.
-    let mut polys = Polygons::default();
-    let mut face_lines: Vec<u64> = Vec::new();
-    let mut ring: Vec<u32> = Vec::new();
-    let mut skipped: BTreeMap<String, (usize, u64)> = BTreeMap::new();
+    read_from(path, &text::decode_file(path, FORMAT, bytes)?[..], opts)
+}
+
+/// Reads OBJ (UTF-8) line by line from `reader`: memory grows with the mesh, not the file.
+pub fn read_from(
+    path: &Path,
+    reader: impl BufRead,
+    opts: &ReadOptions,
+) -> Result<ReadOutput, IoError> {
+    let mut st = State::default();
+    let mut lines = text::LineReader::new(reader);
+    let io = text::read_error(path);
     let mut logical: Vec<u8> = Vec::new();
-    let mut all_lines = text::lines(&text).peekable();
-    while let Some((ln, raw)) = all_lines.next() {
+    while let Some((ln, raw)) = lines.next_line().map_err(io)? {
+        if !continues(raw) {
+            st.statement(ln, raw);
+            continue;
+        }
         // Join continuation lines; the statement keeps the number of its first line.
-        let line: &[u8] = if raw.trim_ascii_end().ends_with(b"\\") {
-            logical.clear();
-            let mut part = raw;
-            loop {
-                let t = part.trim_ascii_end();
-                if let Some(stripped) = t.strip_suffix(b"\\") {
-                    logical.extend_from_slice(stripped);
-                    logical.push(b' ');
-                    match all_lines.next() {
-                        Some((_, next)) => part = next,
-                        None => break,
-                    }
-                } else {
-                    logical.extend_from_slice(part);
-                    break;
-                }
+        logical.clear();
+        push_continued(&mut logical, raw);
+        while let Some((_, part)) = lines.next_line().map_err(io)? {
+            if !continues(part) {
+                logical.extend_from_slice(part);
+                break;
             }
-            &logical
-        } else {
-            raw
-        };
+            push_continued(&mut logical, part);
+        }
+        st.statement(ln, &logical);
+    }
+    st.finish(path, opts)
+}
+
+/// Whether a line ends in `\\` (continues on the next).
+fn continues(line: &[u8]) -> bool {
+    line.trim_ascii_end().ends_with(b"\\")
+}
+
+/// Appends a continued line without its `\\`, and a blank in its place.
+fn push_continued(logical: &mut Vec<u8>, part: &[u8]) {
+    let t = part.trim_ascii_end();
+    logical.extend_from_slice(&t[..t.len() - 1]);
+    logical.push(b' ');
+}
+
+/// What the statements read so far hold.
+#[derive(Default)]
+struct State {
+    problems: Problems,
+    positions: Vec<Point3>,
+    /// Faces: corner indices (0-based, maybe past the end until checked) and their lines.
+    polys: Polygons,
+    face_lines: Vec<u64>,
+    ring: Vec<u32>,
+    skipped: BTreeMap<String, (usize, u64)>,
+}
+
+impl State {
+    /// Reads one statement (continuations joined) of line `ln`.
+    fn statement(&mut self, ln: u64, line: &[u8]) {
         let line = match line.iter().position(|&b| b == b'#') {
             Some(i) => &line[..i],
             None => line,
         };
         let mut w = words(line);
-        let Some(key) = w.next() else { continue };
+        let Some(key) = w.next() else { return };
         match key {
-            b"v" => {
-                let mut xyz = [0.0; 3];
-                let mut found = 0;
-                let mut bad = false;
-                for tok in w.by_ref().take(3) {
-                    match text::number(tok) {
-                        Ok(v) => xyz[found] = v,
-                        Err(k) => {
-                            problems.line(ln, k);
-                            bad = true;
-                        }
-                    }
-                    found += 1;
-                }
-                if found < 3 {
-                    problems.line(ln, ProblemKind::TooFewCoordinates { found });
-                } else if !bad {
-                    positions.push(Point3::new(xyz[0], xyz[1], xyz[2]));
-                } else {
-                    positions.push(Point3::origin());
-                }
-            }
-            b"f" | b"fo" => {
-                ring.clear();
-                let count = positions.len() as i64;
-                let before = problems.count();
-                for tok in w {
-                    let idx = tok.split(|&b| b == b'/').next().unwrap_or(tok);
-                    match std::str::from_utf8(idx)
-                        .ok()
-                        .and_then(|s| s.parse::<i64>().ok())
-                    {
-                        Some(0) => problems.line(ln, ProblemKind::ZeroIndex),
-                        Some(i) if (i < 0 && count + i < 0) || i > i64::from(u32::MAX) => problems
-                            .line(
-                                ln,
-                                ProblemKind::IndexOutOfRange {
-                                    index: i,
-                                    count: count as u64,
-                                },
-                            ),
-                        Some(i) if i < 0 => ring.push((count + i) as u32),
-                        Some(i) => ring.push((i - 1) as u32),
-                        None => problems.line(ln, ProblemKind::BadIndex { token: show(tok) }),
-                    }
-                }
-                if problems.count() == before {
-                    if ring.len() < 3 {
-                        problems.line(ln, ProblemKind::TooFewCorners { found: ring.len() });
-                    } else {
-                        polys.push(ring.iter().copied());
-                        face_lines.push(ln);
-                    }
-                }
-            }
+            b"v" => self.vertex(ln, w),
+            b"f" | b"fo" => self.face(ln, w),
             k if SKIPPED.contains(&k) => {}
             k => {
                 let name = if FREEFORM.contains(&k) {
@@ -160,48 +127,118 @@ pub fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<ReadOutput,
                 } else {
                     format!("'{}'", show(k))
                 };
-                let e = skipped.entry(name).or_insert((0, ln));
+                let e = self.skipped.entry(name).or_insert((0, ln));
                 e.0 += 1;
             }
         }
     }
-    problems.check(path, FORMAT)?;
-    // Forward references are checked now that every vertex is known.
-    let n = positions.len();
-    let mut problems = Problems::default();
-    for (ring, &ln) in polys.iter().zip(&face_lines) {
-        for &c in ring.iter().filter(|&&c| c as usize >= n) {
-            problems.line(
-                ln,
-                ProblemKind::IndexOutOfRange {
-                    index: i64::from(c) + 1,
-                    count: n as u64,
-                },
-            );
+
+    fn vertex<'a>(&mut self, ln: u64, w: impl Iterator<Item = &'a [u8]>) {
+        let mut xyz = [0.0; 3];
+        let mut found = 0;
+        let mut bad = false;
+        for tok in w.take(3) {
+            match text::number(tok) {
+                Ok(v) => xyz[found] = v,
+                Err(k) => {
+                    self.problems.line(ln, k);
+                    bad = true;
+                }
+            }
+            found += 1;
+        }
+        if found < 3 {
+            self.problems
+                .line(ln, ProblemKind::TooFewCoordinates { found });
+        } else if !bad {
+            self.positions.push(Point3::new(xyz[0], xyz[1], xyz[2]));
+        } else {
+            self.positions.push(Point3::origin());
         }
     }
-    problems.check(path, FORMAT)?;
-    super::check_vertex_count(path, n)?;
-    let (faces, stats) = polys.triangulate(&positions, opts.quad_split);
-    let warnings = skipped
-        .iter()
-        .map(|(name, (count, line))| match name.as_str() {
-            "'l'" => format!("{count} line element(s) (l) skipped, first at line {line}"),
-            "'p'" => format!("{count} point element(s) (p) skipped, first at line {line}"),
-            _ => format!("{count} unknown statement(s) {name} skipped, first at line {line}"),
+
+    fn face<'a>(&mut self, ln: u64, w: impl Iterator<Item = &'a [u8]>) {
+        self.ring.clear();
+        let count = self.positions.len() as i64;
+        let before = self.problems.count();
+        for tok in w {
+            let idx = tok.split(|&b| b == b'/').next().unwrap_or(tok);
+            match std::str::from_utf8(idx)
+                .ok()
+                .and_then(|s| s.parse::<i64>().ok())
+            {
+                Some(0) => self.problems.line(ln, ProblemKind::ZeroIndex),
+                Some(i) if (i < 0 && count + i < 0) || i > i64::from(u32::MAX) => {
+                    self.problems.line(
+                        ln,
+                        ProblemKind::IndexOutOfRange {
+                            index: i,
+                            count: count as u64,
+                        },
+                    )
+                }
+                Some(i) if i < 0 => self.ring.push((count + i) as u32),
+                Some(i) => self.ring.push((i - 1) as u32),
+                None => self
+                    .problems
+                    .line(ln, ProblemKind::BadIndex { token: show(tok) }),
+            }
+        }
+        if self.problems.count() == before {
+            if self.ring.len() < 3 {
+                self.problems.line(
+                    ln,
+                    ProblemKind::TooFewCorners {
+                        found: self.ring.len(),
+                    },
+                );
+            } else {
+                self.polys.push(self.ring.iter().copied());
+                self.face_lines.push(ln);
+            }
+        }
+    }
+
+    /// Checks forward references now that every vertex is known, and triangulates.
+    fn finish(self, path: &Path, opts: &ReadOptions) -> Result<ReadOutput, IoError> {
+        self.problems.check(path, FORMAT)?;
+        let n = self.positions.len();
+        let mut problems = Problems::default();
+        for (ring, &ln) in self.polys.iter().zip(&self.face_lines) {
+            for &c in ring.iter().filter(|&&c| c as usize >= n) {
+                problems.line(
+                    ln,
+                    ProblemKind::IndexOutOfRange {
+                        index: i64::from(c) + 1,
+                        count: n as u64,
+                    },
+                );
+            }
+        }
+        problems.check(path, FORMAT)?;
+        super::check_vertex_count(path, n)?;
+        let (faces, stats) = self.polys.triangulate(&self.positions, opts.quad_split);
+        let warnings = self
+            .skipped
+            .iter()
+            .map(|(name, (count, line))| match name.as_str() {
+                "'l'" => format!("{count} line element(s) (l) skipped, first at line {line}"),
+                "'p'" => format!("{count} point element(s) (p) skipped, first at line {line}"),
+                _ => format!("{count} unknown statement(s) {name} skipped, first at line {line}"),
+            })
+            .collect();
+        let info = ReadInfo {
+            format: FORMAT.to_lowercase(),
+            vertices_in_file: n,
+            polygons: stats,
+            warnings,
+            ..ReadInfo::default()
+        };
+        Ok(ReadOutput {
+            mesh: TriMesh::new(self.positions, faces),
+            info,
         })
-        .collect();
-    let info = ReadInfo {
-        format: FORMAT.to_lowercase(),
-        vertices_in_file: positions.len(),
-        polygons: stats,
-        warnings,
-        ..ReadInfo::default()
-    };
-    Ok(ReadOutput {
-        mesh: TriMesh::new(positions, faces),
-        info,
-    })
+    }
 }
 
 /// Writes `mesh` as OBJ.

@@ -401,13 +401,8 @@ pub fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<ReadOutput,
                         read_values += 1;
                         if let Some(xyz) = r.xyz {
                             if let Some(c) = xyz.iter().position(|&x| x == k) {
-                                if !v.is_finite() {
-                                    return Err(malformed(
-                                        path,
-                                        FMT,
-                                        at.clone(),
-                                        ProblemKind::BinaryNonFinite { value: v },
-                                    ));
+                                if let Err(kind) = coordinate(v, t) {
+                                    return Err(malformed(path, FMT, at.clone(), kind));
                                 }
                                 vals[c] = v;
                             }
@@ -428,6 +423,11 @@ pub fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<ReadOutput,
                             Err(e) => return Err(fail(e, read_values)),
                         };
                         read_values += 1;
+                        let whole = |value: f64, what: &'static str| {
+                            whole_number(value, what, &el.name, i)
+                                .map_err(|kind| malformed(path, FMT, at.clone(), kind))
+                        };
+                        whole(n, "list length")?;
                         if n < 0.0 {
                             return Err(malformed(
                                 path,
@@ -443,6 +443,7 @@ pub fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<ReadOutput,
                             let v = reader.value(it).map_err(|e| fail(e, read_values))?;
                             read_values += 1;
                             if is_faces {
+                                whole(v, "vertex index")?;
                                 if v < 0.0 || v >= f64::from(u32::MAX) {
                                     let kind = ProblemKind::IndexOutOfRange {
                                         index: v as i64,
@@ -516,6 +517,40 @@ pub fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<ReadOutput,
     Ok(ReadOutput {
         mesh: TriMesh::new(positions, faces),
         info,
+    })
+}
+
+/// A coordinate `v` read as type `t`: finite, and within the range of a `float` (f32) when
+/// declared so (an ASCII `1e39` would otherwise pass as an f64).
+fn coordinate(v: f64, t: Scalar) -> Result<(), ProblemKind> {
+    if !v.is_finite() {
+        return Err(ProblemKind::BinaryNonFinite { value: v });
+    }
+    if t == Scalar::F32 && v.abs() > f64::from(f32::MAX) {
+        return Err(ProblemKind::PlyFloatRange {
+            value: v,
+            ty: t.name(),
+            max: f64::from(f32::MAX),
+        });
+    }
+    Ok(())
+}
+
+/// A list length or face index must be a whole number (a `float` one may hold 1.7 or NaN).
+fn whole_number(
+    value: f64,
+    what: &'static str,
+    element: &str,
+    index: u64,
+) -> Result<(), ProblemKind> {
+    if value.is_finite() && value.fract() == 0.0 {
+        return Ok(());
+    }
+    Err(ProblemKind::PlyNotInteger {
+        element: element.to_string(),
+        index,
+        what,
+        value,
     })
 }
 

@@ -27,12 +27,13 @@ use std::path::Path;
 
 /// Whether `bytes` has the exact size of a binary STL with the count it declares.
 pub fn is_binary(bytes: &[u8]) -> bool {
-    bytes.len() >= 84
-        && 84
-            + 50 * u64::from(u32::from_le_bytes([
-                bytes[80], bytes[81], bytes[82], bytes[83],
-            ]))
-            == bytes.len() as u64
+    is_binary_len(bytes, bytes.len() as u64)
+}
+
+/// Whether a file of `len` bytes that starts with `head` is a binary STL by its size.
+pub fn is_binary_len(head: &[u8], len: u64) -> bool {
+    head.len() >= 84
+        && 84 + 50 * u64::from(u32::from_le_bytes([head[80], head[81], head[82], head[83]])) == len
 }
 
 /// Whether `bytes` starts, after blanks, with the word `solid`.

@@ -1,7 +1,9 @@
 //! Helpers shared by the text readers: encodings, lines, numbers.
 
-use super::error::ProblemKind;
+use super::error::{IoError, Location, ProblemKind};
 use std::borrow::Cow;
+use std::io::BufRead;
+use std::path::Path;
 
 /// The text as UTF-8 bytes: a UTF-8 byte-order mark is dropped, UTF-16 (with a byte-order mark,
 /// or recognised by its zero bytes) is transcoded. Other bytes pass through untouched: tokens
@@ -33,18 +35,98 @@ pub fn decode(bytes: &[u8]) -> Result<Cow<'_, [u8]>, String> {
     }
 }
 
-/// Lines with their 1-based numbers, line ends (`\n`, `\r\n`, lone `\r`) removed.
-pub fn lines(text: &[u8]) -> impl Iterator<Item = (u64, &[u8])> {
-    let cr_only = !text.contains(&b'\n') && text.contains(&b'\r');
-    let sep = if cr_only { b'\r' } else { b'\n' };
-    let mut parts: Vec<&[u8]> = text.split(move |&b| b == sep).collect();
-    if parts.last().is_some_and(|l| l.is_empty()) {
-        parts.pop();
+/// `bytes` decoded (see [`decode`]); an encoding problem is an error naming `path`.
+pub fn decode_file<'a>(
+    path: &Path,
+    format: &'static str,
+    bytes: &'a [u8],
+) -> Result<Cow<'a, [u8]>, IoError> {
+    decode(bytes).map_err(|reason| {
+        super::error::malformed(
+            path,
+            format,
+            Location::File,
+            ProblemKind::Encoding { reason },
+        )
+    })
+}
+
+/// Turns a failure to read `path` into its [`IoError`].
+pub fn read_error(path: &Path) -> impl Fn(std::io::Error) -> IoError + Copy + '_ {
+    move |source| IoError::Read {
+        path: path.to_path_buf(),
+        source,
     }
-    parts
-        .into_iter()
-        .enumerate()
-        .map(|(i, l)| (i as u64 + 1, l.strip_suffix(b"\r").unwrap_or(l)))
+}
+
+/// Lines read one at a time from a [`BufRead`], with their 1-based numbers and the line end
+/// (`\n`, `\r\n` or a lone `\r`) removed. Only the current line is held: memory is the longest
+/// line, whatever the number of lines.
+pub struct LineReader<R> {
+    inner: R,
+    line: Vec<u8>,
+    number: u64,
+    /// The last line ended in `\r`: a `\n` right after it belongs to that line end.
+    after_cr: bool,
+}
+
+impl<R: BufRead> LineReader<R> {
+    /// Lines of `inner`, from its current position.
+    pub fn new(inner: R) -> LineReader<R> {
+        LineReader {
+            inner,
+            line: Vec::new(),
+            number: 0,
+            after_cr: false,
+        }
+    }
+
+    /// The next line and its number; `None` at the end.
+    pub fn next_line(&mut self) -> std::io::Result<Option<(u64, &[u8])>> {
+        self.line.clear();
+        if std::mem::take(&mut self.after_cr) && self.inner.fill_buf()?.first() == Some(&b'\n') {
+            self.inner.consume(1);
+        }
+        if self.inner.fill_buf()?.is_empty() {
+            return Ok(None);
+        }
+        loop {
+            let chunk = self.inner.fill_buf()?;
+            if chunk.is_empty() {
+                break;
+            }
+            match chunk.iter().position(|&b| b == b'\n' || b == b'\r') {
+                Some(i) => {
+                    self.after_cr = chunk[i] == b'\r';
+                    self.line.extend_from_slice(&chunk[..i]);
+                    self.inner.consume(i + 1);
+                    break;
+                }
+                None => {
+                    let n = chunk.len();
+                    self.line.extend_from_slice(chunk);
+                    self.inner.consume(n);
+                }
+            }
+        }
+        self.number += 1;
+        Ok(Some((self.number, &self.line)))
+    }
+
+    /// Bytes held for the current line (its buffer's capacity).
+    #[cfg(test)]
+    pub fn held(&self) -> usize {
+        self.line.capacity()
+    }
+}
+
+/// The lines of `text` (see [`LineReader`]), for callers that have the bytes in memory.
+pub fn lines(text: &[u8]) -> impl Iterator<Item = (u64, Vec<u8>)> + '_ {
+    let mut r = LineReader::new(text);
+    std::iter::from_fn(move || match r.next_line() {
+        Ok(Some((n, l))) => Some((n, l.to_vec())),
+        _ => None,
+    })
 }
 
 /// Parses a finite `f64` (`1.5e-3`, `-0.`, `+2`, `.5` are fine; NaN and infinity are not).
@@ -115,8 +197,29 @@ mod tests {
         }
         let t = decode(&b).unwrap();
         let l: Vec<_> = lines(&t).collect();
-        assert_eq!(l, vec![(1, &b"v 1 2 3"[..]), (2, &b"f 1"[..])]);
+        assert_eq!(l, vec![(1, b"v 1 2 3".to_vec()), (2, b"f 1".to_vec())]);
         let old_mac: Vec<_> = lines(b"a\rb\r").collect();
         assert_eq!(old_mac.len(), 2);
+        let mixed: Vec<_> = lines(b"\na\r\n\rb").map(|(_, l)| l).collect();
+        assert_eq!(
+            mixed,
+            vec![b"".to_vec(), b"a".to_vec(), b"".to_vec(), b"b".to_vec()]
+        );
+        assert_eq!(lines(b"").count(), 0);
+    }
+
+    /// A reader that hands out a million blank lines a few bytes at a time, and what the
+    /// line reader holds meanwhile: one line, not the million.
+    #[test]
+    fn hostile_million_blank_lines_hold_one_line() {
+        let text = "\n".repeat(1_000_000) + "v 1 2 3\n";
+        let mut r = LineReader::new(std::io::BufReader::with_capacity(16, text.as_bytes()));
+        let (mut count, mut most) = (0, 0);
+        while let Some((n, _)) = r.next_line().unwrap() {
+            count = n;
+            most = most.max(r.held());
+        }
+        assert_eq!(count, 1_000_001);
+        assert!(most <= 64, "held {most} bytes");
     }
 }

@@ -18,14 +18,14 @@
 //! Written: one point per line, three lines a triangle, each number in the shortest form that
 //! reads back to the same `f64` bit for bit.
 
-use super::error::{IoError, Location, ProblemKind, Problems};
+use super::error::{IoError, ProblemKind, Problems};
 use super::text::{self, show};
 use super::{ReadInfo, ReadOptions, ReadOutput};
 use crate::math::Point3;
 use crate::mesh::polygon::Polygons;
 use crate::mesh::weld::ExactIndexer;
 use crate::mesh::TriMesh;
-use std::io::Write;
+use std::io::{BufRead, Write};
 use std::path::Path;
 
 const FORMAT: &str = "vertex-triples";
@@ -41,21 +41,25 @@ enum Item {
 
 /// Reads vertex triples from `bytes` (`path` names the file in messages).
 pub fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<ReadOutput, IoError> {
-    let text = text::decode(bytes).map_err(|reason| {
-        super::error::malformed(
-            path,
-            FORMAT,
-            Location::File,
-            ProblemKind::Encoding { reason },
-        )
-    })?;
+    read_from(path, &text::decode_file(path, FORMAT, bytes)?[..], opts)
+}
+
+/// Reads vertex triples (UTF-8) line by line from `reader`: memory grows with the points, not
+/// with the lines.
+pub fn read_from(
+    path: &Path,
+    reader: impl BufRead,
+    opts: &ReadOptions,
+) -> Result<ReadOutput, IoError> {
     let mut problems = Problems::default();
     let mut items: Vec<Item> = Vec::new();
     let mut current: Option<Block> = None;
     let mut nums: Vec<f64> = Vec::with_capacity(12);
     let mut face_lines = 0usize;
     let mut point_lines = 0usize;
-    for (ln, line) in text::lines(&text) {
+    let mut lines = text::LineReader::new(reader);
+    let io = text::read_error(path);
+    while let Some((ln, line)) = lines.next_line().map_err(io)? {
         let trimmed = line.trim_ascii();
         if trimmed.is_empty() {
             if let Some(b) = current.take() {

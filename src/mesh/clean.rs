@@ -4,24 +4,48 @@
 
 use super::topology::is_index_degenerate;
 use super::TriMesh;
-use crate::math::tol;
+use crate::math::{tol, Point3};
 
 /// Which faces are degenerate, and how many.
+///
+/// The test is relative to the mesh's own size, so it gives the same answer for the mesh scaled
+/// by any power of ten: the corners are moved to the box's corner, halved and scaled by a power
+/// of two ([`unit_scale`]) before the cross product, so coordinates of 1e200 do not overflow and
+/// of 1e-200 do not underflow.
 pub fn find_degenerate(mesh: &TriMesh) -> (Vec<bool>, usize) {
-    let d = mesh.diagonal();
+    let Some(b) = mesh.bbox() else {
+        return (vec![false; mesh.faces.len()], 0);
+    };
+    let half = |p: &Point3| p * 0.5 - b.min * 0.5;
+    let extent = half(&b.max);
+    let s = unit_scale(extent.max());
+    let d = (extent * s).norm();
     // Compare twice the area squared against the threshold, avoiding a square root per face.
     let limit = 2.0 * tol::DEGENERATE_AREA_REL * d * d;
     let limit2 = limit * limit;
     let mut n = 0;
     let flags = (0..mesh.faces.len())
         .map(|f| {
-            let bad =
-                is_index_degenerate(&mesh.faces[f]) || mesh.face_cross(f).norm_squared() <= limit2;
+            let [p, q, r] = mesh.corners(f).map(|c| half(&c) * s);
+            let bad = is_index_degenerate(&mesh.faces[f])
+                || (q - p).cross(&(r - p)).norm_squared() <= limit2;
             n += usize::from(bad);
             bad
         })
         .collect();
     (flags, n)
+}
+
+/// A power of two `s` with `extent * s` in [1, 2): lengths times `s` are near 1, and their
+/// products neither overflow nor underflow (the scaling is exact). 1 when `extent` is zero or
+/// not finite.
+pub fn unit_scale(extent: f64) -> f64 {
+    if !(extent > 0.0 && extent.is_finite()) {
+        return 1.0;
+    }
+    let e = extent.log2().floor() as i32;
+    // Two steps: 2^-e alone overflows for the smallest subnormal extents.
+    2f64.powi(-e / 2) * 2f64.powi(-e + e / 2)
 }
 
 /// Which faces repeat the vertex set of an earlier face, and how many.
@@ -91,7 +115,6 @@ pub fn drop_duplicates(mesh: &mut TriMesh) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::math::Point3;
 
     #[test]
     fn drops_repeated_index_sliver_and_duplicates() {

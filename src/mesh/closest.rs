@@ -158,11 +158,16 @@ impl<'a> ClosestPoints<'a> {
             point: *p,
             face: usize::MAX,
         };
-        let max_shell = dims.iter().copied().max().unwrap_or(1) as i64;
+        // The last shell that still holds a cell of the grid.
+        let max_shell = (0..3)
+            .map(|k| home[k].max(dims[k] as i64 - 1 - home[k]))
+            .max()
+            .unwrap_or(0);
         for shell in 0..=max_shell {
             // Cells of shell s are at least (s - 1) cells from the projection, hence from p.
             let reach = ((shell as f64 - 1.0).max(0.0) * self.cell).max(outside);
-            if reach > best.distance {
+            // An infinite reach (p at 1e308: its distance overflows) can find nothing nearer.
+            if reach > best.distance || reach == f64::INFINITY {
                 break;
             }
             let s = shell;
@@ -241,5 +246,31 @@ mod tests {
                 .fold(f64::INFINITY, f64::min);
             assert!((q.closest(&p).distance - brute).abs() < 1e-12);
         }
+    }
+    /// A point at 1e308 is infinitely far (its distance overflows): the answer comes at once,
+    /// without visiting every shell of cells (on a 513-cell strip, 10^11 cells: a hang).
+    #[test]
+    fn hostile_point_at_1e308_ends() {
+        let (nx, ny) = (1000u32, 60u32);
+        let positions = (0..=ny)
+            .flat_map(|j| (0..=nx).map(move |i| Point3::new(0.1 * i as f64, 0.1 * j as f64, 0.0)))
+            .collect();
+        let v = |i: u32, j: u32| j * (nx + 1) + i;
+        let faces = (0..ny)
+            .flat_map(|j| {
+                (0..nx).flat_map(move |i| {
+                    [
+                        [v(i, j), v(i + 1, j), v(i + 1, j + 1)],
+                        [v(i, j), v(i + 1, j + 1), v(i, j + 1)],
+                    ]
+                })
+            })
+            .collect();
+        let m = TriMesh::new(positions, faces);
+        let q = ClosestPoints::new(&m);
+        assert!(q.dims[0] > 500, "{:?}", q.dims);
+        let h = q.closest(&Point3::new(1e308, 0.0, 0.0));
+        assert_eq!(h.distance, f64::INFINITY);
+        assert!((q.closest(&Point3::new(50.0, 3.0, 1.0)).distance - 1.0).abs() < 1e-12);
     }
 }

@@ -9,9 +9,10 @@
 //!   does ([`QuadSplit::Paper`]), or along its shorter diagonal ([`QuadSplit::Shortest`]). A
 //!   concave quad is always split through its reflex corner, the only split without overlap.
 //! * An n-gon (n >= 5) is projected on the plane of its Newell normal and ear-clipped: an ear is a
-//!   convex corner whose triangle holds no other corner and whose new diagonal crosses no edge.
-//!   Corners that coincide with the ear's own corners (the two sides of a bridge to a hole) do not
-//!   block it. Every triangle keeps the polygon's winding, so the triangle areas sum to the
+//!   convex corner whose triangle holds no reflex corner (in a simple polygon, no corner at all)
+//!   and whose new diagonal crosses no edge of a reflex corner near it. Corners that coincide
+//!   with the ear's own corners (the two sides of a bridge to a hole) do not block it. The reflex
+//!   corners are kept in a grid, so a ring of 100,000 corners takes a fraction of a second. Every triangle keeps the polygon's winding, so the triangle areas sum to the
 //!   polygon's area: no overlaps.
 
 use crate::math::{newell_normal, orient2d, tol, Point2, Point3};
@@ -374,50 +375,21 @@ impl Ord for Ear {
 
 /// Ear clipping of a cleaned ring of five or more corners. The best-shaped ear (area over the
 /// squared longest edge) goes first, so near-collinear runs are not cut into slivers; after each
-/// clip only the two neighbours are re-examined (O(n^2) in all).
+/// clip only the two neighbours are re-examined. An ear test looks only at the reflex corners
+/// near the ear ([`EarRing`]): O(n log n) for typical polygons (a convex one has none).
 fn ear_clip(positions: &[Point3], ring: &[u32], out: &mut Vec<[u32; 3]>, stats: &mut PolygonStats) {
-    let n = ring.len();
-    let normal = newell_normal(ring.iter().map(|&i| positions[i as usize]));
-    let k = normal.iamax();
-    if normal[k] == 0.0 {
+    let Some(pts) = project(positions, ring) else {
         stats.degenerate_polygons += 1;
         return;
-    }
-    // Drop axis k; the cyclic order of the other two keeps the winding counter-clockwise.
-    let (u, v) = if normal[k] > 0.0 {
-        ((k + 1) % 3, (k + 2) % 3)
-    } else {
-        ((k + 2) % 3, (k + 1) % 3)
     };
-    let pts: Vec<Point2> = ring
-        .iter()
-        .map(|&i| {
-            let p = positions[i as usize];
-            Point2::new(p[u], p[v])
-        })
-        .collect();
-    let mut next: Vec<usize> = (0..n).map(|i| (i + 1) % n).collect();
-    let mut prev: Vec<usize> = (0..n).map(|i| (i + n - 1) % n).collect();
-    let mut alive = vec![true; n];
+    let n = ring.len();
+    let mut r = EarRing::new(&pts);
     let mut version = vec![0u32; n];
-    let mut remaining = n;
-    let quality = |next: &[usize], prev: &[usize], remaining: usize, i: usize| -> Option<f64> {
-        let (a, c) = (prev[i], next[i]);
-        if !is_ear(&pts, next, a, i, c, remaining, false) {
-            return None;
-        }
-        let area = orient2d(&pts[a], &pts[i], &pts[c]);
-        let longest = (pts[i] - pts[a])
-            .norm_squared()
-            .max((pts[c] - pts[i]).norm_squared())
-            .max((pts[a] - pts[c]).norm_squared());
-        Some(area / longest)
-    };
     let mut heap = std::collections::BinaryHeap::new();
     for i in 0..n {
-        if let Some(q) = quality(&next, &prev, remaining, i) {
+        if let Some(quality) = r.ear_quality(i) {
             heap.push(Ear {
-                quality: q,
+                quality,
                 corner: i,
                 version: 0,
             });
@@ -426,63 +398,272 @@ fn ear_clip(positions: &[Point3], ring: &[u32], out: &mut Vec<[u32; 3]>, stats: 
     let mut overlapped = false;
     let mut last = 0;
     let mut tris: Vec<[usize; 3]> = Vec::with_capacity(n - 2);
-    while remaining > 3 {
-        let corner = loop {
+    while r.remaining > 3 {
+        let i = loop {
             match heap.pop() {
-                Some(e) if alive[e.corner] && version[e.corner] == e.version => {
-                    break Some(e.corner)
-                }
+                Some(e) if r.alive[e.corner] && version[e.corner] == e.version => break e.corner,
                 Some(_) => continue,
-                None => break None,
+                None => break r.fallback_ear(&mut overlapped),
             }
         };
-        let i = match corner {
-            Some(i) => i,
-            None => {
-                // No proper ear: a flat one, else the most convex corner (a self-intersecting ring).
-                let live: Vec<usize> = (0..n).filter(|&j| alive[j]).collect();
-                match live
-                    .iter()
-                    .copied()
-                    .find(|&j| is_ear(&pts, &next, prev[j], j, next[j], remaining, true))
-                {
-                    Some(j) => j,
-                    None => {
-                        overlapped = true;
-                        live.iter()
-                            .copied()
-                            .max_by(|&a, &b| {
-                                orient2d(&pts[prev[a]], &pts[a], &pts[next[a]])
-                                    .total_cmp(&orient2d(&pts[prev[b]], &pts[b], &pts[next[b]]))
-                            })
-                            .unwrap()
-                    }
-                }
-            }
-        };
-        let (a, c) = (prev[i], next[i]);
+        let (a, c) = (r.prev[i], r.next[i]);
         tris.push([a, i, c]);
-        next[a] = c;
-        prev[c] = a;
-        alive[i] = false;
-        remaining -= 1;
+        r.clip(i);
         last = c;
         for j in [a, c] {
             version[j] += 1;
-            if let Some(q) = quality(&next, &prev, remaining, j) {
+            if let Some(quality) = r.ear_quality(j) {
                 heap.push(Ear {
-                    quality: q,
+                    quality,
                     corner: j,
                     version: version[j],
                 });
             }
         }
     }
-    tris.push([prev[last], last, next[last]]);
+    tris.push([r.prev[last], last, r.next[last]]);
     flip_flat_triangles(&pts, &mut tris);
     out.extend(tris.iter().map(|t| t.map(|i| ring[i])));
     if overlapped {
         stats.overlapping_polygons += 1;
+    }
+}
+
+/// The ring's corners projected on the plane of its Newell normal, counter-clockwise; `None`
+/// when the normal is zero (no area).
+fn project(positions: &[Point3], ring: &[u32]) -> Option<Vec<Point2>> {
+    let normal = newell_normal(ring.iter().map(|&i| positions[i as usize]));
+    let k = normal.iamax();
+    if normal[k] == 0.0 || normal[k].is_nan() {
+        return None;
+    }
+    // Drop axis k; the cyclic order of the other two keeps the winding counter-clockwise.
+    let (u, v) = if normal[k] > 0.0 {
+        ((k + 1) % 3, (k + 2) % 3)
+    } else {
+        ((k + 2) % 3, (k + 1) % 3)
+    };
+    Some(
+        ring.iter()
+            .map(|&i| {
+                let p = positions[i as usize];
+                Point2::new(p[u], p[v])
+            })
+            .collect(),
+    )
+}
+
+/// The corners left in an ear clipping: a doubly linked ring, and its reflex (or flat) corners,
+/// the only ones that can lie in an ear of a simple polygon, listed and in a grid.
+struct EarRing<'a> {
+    pts: &'a [Point2],
+    next: Vec<usize>,
+    prev: Vec<usize>,
+    alive: Vec<bool>,
+    remaining: usize,
+    reflex: ReflexCorners,
+}
+
+impl<'a> EarRing<'a> {
+    fn new(pts: &'a [Point2]) -> EarRing<'a> {
+        let n = pts.len();
+        let mut r = EarRing {
+            pts,
+            next: (0..n).map(|i| (i + 1) % n).collect(),
+            prev: (0..n).map(|i| (i + n - 1) % n).collect(),
+            alive: vec![true; n],
+            remaining: n,
+            reflex: ReflexCorners::new(pts),
+        };
+        for i in 0..n {
+            r.classify(i);
+        }
+        r
+    }
+
+    /// Lists corner `i` with the reflex corners when it turns clockwise or not at all.
+    fn classify(&mut self, i: usize) {
+        let p = self.pts;
+        let convex = orient2d(&p[self.prev[i]], &p[i], &p[self.next[i]]) > 0.0;
+        self.reflex.set(i, &p[i], self.alive[i] && !convex);
+    }
+
+    /// Removes corner `b`: its neighbours become joined, and may stop being reflex.
+    fn clip(&mut self, b: usize) {
+        let (a, c) = (self.prev[b], self.next[b]);
+        self.next[a] = c;
+        self.prev[c] = a;
+        self.alive[b] = false;
+        self.remaining -= 1;
+        for i in [a, b, c] {
+            self.classify(i);
+        }
+    }
+
+    /// The ear's shape (area over the squared longest edge) when corner `i` is a proper ear.
+    fn ear_quality(&self, i: usize) -> Option<f64> {
+        let (a, c) = (self.prev[i], self.next[i]);
+        if !self.is_ear(a, i, c, false) {
+            return None;
+        }
+        let p = self.pts;
+        let area = orient2d(&p[a], &p[i], &p[c]);
+        let longest = (p[i] - p[a])
+            .norm_squared()
+            .max((p[c] - p[i]).norm_squared())
+            .max((p[a] - p[c]).norm_squared());
+        Some(area / longest)
+    }
+
+    /// When no proper ear is left: a flat one, else the most convex corner (a self-intersecting
+    /// ring, which sets `overlapped`).
+    fn fallback_ear(&self, overlapped: &mut bool) -> usize {
+        let live: Vec<usize> = (0..self.alive.len()).filter(|&j| self.alive[j]).collect();
+        if let Some(j) = live
+            .iter()
+            .copied()
+            .find(|&j| self.is_ear(self.prev[j], j, self.next[j], true))
+        {
+            return j;
+        }
+        *overlapped = true;
+        let turn = |j: usize| {
+            orient2d(
+                &self.pts[self.prev[j]],
+                &self.pts[j],
+                &self.pts[self.next[j]],
+            )
+        };
+        live.iter()
+            .copied()
+            .max_by(|&x, &y| turn(x).total_cmp(&turn(y)))
+            .unwrap()
+    }
+
+    /// Whether (a, b, c) is an ear: it turns counter-clockwise (or is flat, when allowed), holds
+    /// no reflex corner (corners that coincide with its own do not count), and no edge of a
+    /// reflex corner near it crosses its new diagonal c -> a.
+    fn is_ear(&self, a: usize, b: usize, c: usize, allow_flat: bool) -> bool {
+        let (pa, pb, pc) = (self.pts[a], self.pts[b], self.pts[c]);
+        let area = orient2d(&pa, &pb, &pc);
+        if area < 0.0 || (area == 0.0 && !allow_flat) {
+            return false;
+        }
+        let blocks = |j: usize| {
+            let q = self.pts[j];
+            let inside = area > 0.0
+                && !(q == pa || q == pb || q == pc)
+                && orient2d(&pa, &pb, &q) >= 0.0
+                && orient2d(&pb, &pc, &q) >= 0.0
+                && orient2d(&pc, &pa, &q) >= 0.0;
+            inside
+                || self.edge_crosses(j, self.next[j], &pc, &pa)
+                || self.edge_crosses(self.prev[j], j, &pc, &pa)
+        };
+        let (lo, hi) = (pa.inf(&pb).inf(&pc), pa.sup(&pb).sup(&pc));
+        !self.reflex.near(&lo, &hi).any(blocks)
+    }
+
+    /// Whether the edge `j -> k` crosses the segment `p0 -> p1` without sharing an end point.
+    fn edge_crosses(&self, j: usize, k: usize, p0: &Point2, p1: &Point2) -> bool {
+        let (q0, q1) = (self.pts[j], self.pts[k]);
+        let shares = q0 == *p0 || q0 == *p1 || q1 == *p0 || q1 == *p1;
+        !shares && segments_cross(p0, p1, &q0, &q1)
+    }
+}
+
+/// The reflex corners of a projected ring, in a list and in a uniform grid of about one cell
+/// per corner of the ring, so that the corners near a box are found by the cells it covers, or
+/// by the list when that is shorter.
+struct ReflexCorners {
+    min: Point2,
+    /// Cells per unit of half the coordinate (halves keep `max - min` finite for any input).
+    scale: [f64; 2],
+    dims: [usize; 2],
+    cells: Vec<Vec<u32>>,
+    list: Vec<u32>,
+    /// Where each listed corner is in `list` (`usize::MAX`: not listed).
+    slot: Vec<usize>,
+}
+
+impl ReflexCorners {
+    fn new(pts: &[Point2]) -> ReflexCorners {
+        let n = pts.len();
+        let (lo, hi) = pts
+            .iter()
+            .fold((pts[0], pts[0]), |(lo, hi), p| (lo.inf(p), hi.sup(p)));
+        let half = [0, 1].map(|k| hi[k] * 0.5 - lo[k] * 0.5);
+        let usable = half.iter().all(|h| h.is_finite() && *h > 0.0);
+        let dims = if usable {
+            let nx = ((n as f64 * half[0] / half[1]).sqrt().ceil() as usize).clamp(1, n);
+            [nx, n.div_ceil(nx)]
+        } else {
+            [1, 1]
+        };
+        let scale = [0, 1].map(|k| {
+            if usable {
+                dims[k] as f64 / half[k]
+            } else {
+                0.0
+            }
+        });
+        ReflexCorners {
+            min: lo,
+            scale,
+            dims,
+            cells: vec![Vec::new(); dims[0] * dims[1]],
+            list: Vec::new(),
+            slot: vec![usize::MAX; n],
+        }
+    }
+
+    /// The cell of `p`, clamped into the grid (monotone in each coordinate).
+    fn cell(&self, p: &Point2) -> [usize; 2] {
+        [0, 1].map(|k| {
+            let c = (p[k] * 0.5 - self.min[k] * 0.5) * self.scale[k];
+            if c > 0.0 {
+                (c as usize).min(self.dims[k] - 1)
+            } else {
+                0
+            }
+        })
+    }
+
+    /// Lists corner `i` at `p`, or takes it off the lists.
+    fn set(&mut self, i: usize, p: &Point2, reflex: bool) {
+        if reflex == (self.slot[i] != usize::MAX) {
+            return;
+        }
+        let [x, y] = self.cell(p);
+        let cell = &mut self.cells[x + self.dims[0] * y];
+        if reflex {
+            self.slot[i] = self.list.len();
+            self.list.push(i as u32);
+            cell.push(i as u32);
+            return;
+        }
+        let at = self.slot[i];
+        self.list.swap_remove(at);
+        if let Some(&moved) = self.list.get(at) {
+            self.slot[moved as usize] = at;
+        }
+        self.slot[i] = usize::MAX;
+        if let Some(k) = cell.iter().position(|&j| j as usize == i) {
+            cell.swap_remove(k);
+        }
+    }
+
+    /// Reflex corners in the cells the box `lo..hi` covers (all of them when the box covers
+    /// more cells than there are reflex corners).
+    fn near(&self, lo: &Point2, hi: &Point2) -> Box<dyn Iterator<Item = usize> + '_> {
+        let (a, b) = (self.cell(lo), self.cell(hi));
+        if (b[0] - a[0] + 1) * (b[1] - a[1] + 1) > self.list.len() {
+            return Box::new(self.list.iter().map(|&j| j as usize));
+        }
+        Box::new((a[1]..=b[1]).flat_map(move |y| {
+            (a[0]..=b[0])
+                .flat_map(move |x| self.cells[x + self.dims[0] * y].iter().map(|&j| j as usize))
+        }))
     }
 }
 
@@ -491,7 +672,7 @@ const FLAT: f64 = 1e-9;
 
 /// Removes flat triangles (three nearly collinear corners, left where the ring has straight
 /// runs) by flipping each one's longest edge with the triangle across it, when both new
-/// triangles keep the winding.
+/// triangles keep the winding. The triangle across an edge is found in a map of directed edges.
 fn flip_flat_triangles(pts: &[Point2], tris: &mut [[usize; 3]]) {
     let flatness = |t: &[usize; 3]| {
         let (a, b, c) = (pts[t[0]], pts[t[1]], pts[t[2]]);
@@ -505,6 +686,10 @@ fn flip_flat_triangles(pts: &[Point2], tris: &mut [[usize; 3]]) {
             orient2d(&a, &b, &c) / longest
         }
     };
+    let mut across = EdgeOwners::default();
+    for (t, tri) in tris.iter().enumerate() {
+        across.insert(tri, t);
+    }
     for _ in 0..tris.len() {
         let mut changed = false;
         for t in 0..tris.len() {
@@ -516,9 +701,7 @@ fn flip_flat_triangles(pts: &[Point2], tris: &mut [[usize; 3]]) {
             let len = |k: usize| (pts[tri[(k + 1) % 3]] - pts[tri[k]]).norm_squared();
             let k = (0..3).max_by(|&x, &y| len(x).total_cmp(&len(y))).unwrap();
             let (p, q, r) = (tri[k], tri[(k + 1) % 3], tri[(k + 2) % 3]);
-            let Some(u) = (0..tris.len())
-                .find(|&u| u != t && (0..3).any(|j| tris[u][j] == q && tris[u][(j + 1) % 3] == p))
-            else {
+            let Some(u) = across.get(q, p).filter(|&u| u != t) else {
                 continue;
             };
             let j = (0..3)
@@ -527,8 +710,12 @@ fn flip_flat_triangles(pts: &[Point2], tris: &mut [[usize; 3]]) {
             let s = tris[u][(j + 2) % 3];
             let (t1, t2) = ([r, p, s], [s, q, r]);
             if flatness(&t1) > FLAT && flatness(&t2) > FLAT {
+                across.remove(&tris[t], t);
+                across.remove(&tris[u], u);
                 tris[t] = t1;
                 tris[u] = t2;
+                across.insert(&t1, t);
+                across.insert(&t2, u);
                 changed = true;
             }
         }
@@ -538,49 +725,32 @@ fn flip_flat_triangles(pts: &[Point2], tris: &mut [[usize; 3]]) {
     }
 }
 
-fn is_ear(
-    pts: &[Point2],
-    next: &[usize],
-    a: usize,
-    b: usize,
-    c: usize,
-    remaining: usize,
-    allow_flat: bool,
-) -> bool {
-    let (pa, pb, pc) = (pts[a], pts[b], pts[c]);
-    let area = orient2d(&pa, &pb, &pc);
-    if area < 0.0 || (area == 0.0 && !allow_flat) {
-        return false;
+/// Which triangle holds each directed edge.
+#[derive(Default)]
+struct EdgeOwners(std::collections::HashMap<(usize, usize), usize>);
+
+impl EdgeOwners {
+    fn edges(tri: &[usize; 3]) -> [(usize, usize); 3] {
+        [0, 1, 2].map(|k| (tri[k], tri[(k + 1) % 3]))
     }
-    let coincides = |q: &Point2| *q == pa || *q == pb || *q == pc;
-    let mut j = next[c];
-    for _ in 0..remaining.saturating_sub(3) {
-        let q = pts[j];
-        if !coincides(&q)
-            && area > 0.0
-            && orient2d(&pa, &pb, &q) >= 0.0
-            && orient2d(&pb, &pc, &q) >= 0.0
-            && orient2d(&pc, &pa, &q) >= 0.0
-        {
-            return false;
+
+    fn insert(&mut self, tri: &[usize; 3], t: usize) {
+        for e in Self::edges(tri) {
+            self.0.entry(e).or_insert(t);
         }
-        j = next[j];
     }
-    // The new diagonal c -> a must not cross any remaining edge.
-    let mut j = c;
-    loop {
-        let k = next[j];
-        if k == a {
-            break;
+
+    fn remove(&mut self, tri: &[usize; 3], t: usize) {
+        for e in Self::edges(tri) {
+            if self.0.get(&e) == Some(&t) {
+                self.0.remove(&e);
+            }
         }
-        let (q0, q1) = (pts[j], pts[k]);
-        let shares = q0 == pa || q0 == pc || q1 == pa || q1 == pc;
-        if !shares && segments_cross(&pc, &pa, &q0, &q1) {
-            return false;
-        }
-        j = k;
     }
-    true
+
+    fn get(&self, a: usize, b: usize) -> Option<usize> {
+        self.0.get(&(a, b)).copied()
+    }
 }
 
 /// Whether segments (p0, p1) and (q0, q1) cross at a point interior to both.
@@ -753,5 +923,42 @@ mod tests {
         let (signed, abs) = areas(&p, &t);
         assert!((signed - 12.0).abs() < 1e-12, "area {signed}");
         assert!((abs - 12.0).abs() < 1e-12, "overlap: {abs}");
+    }
+    /// A ring of `n` corners at angle `2 pi i / n` and the radius `radius(i)`, and its area.
+    fn big_ring(n: usize, radius: impl Fn(usize) -> f64) -> (Vec<Point3>, Vec<u32>) {
+        let p: Vec<Point3> = (0..n)
+            .map(|i| {
+                let (s, c) = (std::f64::consts::TAU * i as f64 / n as f64).sin_cos();
+                Point3::new(radius(i) * c, radius(i) * s, 0.0)
+            })
+            .collect();
+        (p, (0..n as u32).collect())
+    }
+
+    fn assert_exact_cover(p: &[Point3], ring: &[u32]) {
+        let (t, st) = run(p, ring, QuadSplit::Paper);
+        assert_eq!((t.len(), st.overlapping_polygons), (ring.len() - 2, 0));
+        let (signed, abs) = areas(p, &t);
+        let shoelace = 0.5 * newell_normal(p.iter().copied()).z;
+        assert!(
+            (signed - shoelace).abs() < 1e-9 * shoelace,
+            "{signed} {shoelace}"
+        );
+        assert!(
+            (abs - shoelace).abs() < 1e-9 * shoelace,
+            "overlap: {abs} {shoelace}"
+        );
+    }
+
+    #[test]
+    fn hostile_100k_corner_convex_polygon() {
+        let (p, ring) = big_ring(100_000, |_| 1.0);
+        assert_exact_cover(&p, &ring);
+    }
+
+    #[test]
+    fn hostile_100k_corner_star_polygon() {
+        let (p, ring) = big_ring(100_000, |i| if i % 2 == 0 { 1.0 } else { 0.6 });
+        assert_exact_cover(&p, &ring);
     }
 }

@@ -1,0 +1,215 @@
+//! Hostile input (issue 9): counts that would allocate or run without bound are refused before
+//! any work, naming the key or flag and the limit; huge and tiny coordinates give an answer.
+//! Every run has a time limit: a hang is a failure, not a stuck test.
+
+mod common;
+use common::{drapekit, fixture, listing, text};
+use std::process::Output;
+use std::time::{Duration, Instant};
+
+/// Runs drapekit with `args`, killing it (and failing) after `limit`.
+fn run_within(args: &[&str], limit: Duration) -> Output {
+    let mut child = drapekit()
+        .args(args)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("drapekit runs");
+    let start = Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > limit {
+            child.kill().unwrap();
+            child.wait().unwrap();
+            panic!("drapekit {args:?} still runs after {limit:?}");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    child.wait_with_output().unwrap()
+}
+
+/// The sphere-drop scene with `edits` (from, to) applied, in a fresh directory.
+fn scene(edits: &[(&str, &str)]) -> (tempfile::TempDir, std::path::PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let mut s = std::fs::read_to_string(fixture("scenes/sphere_drop.toml")).unwrap();
+    for (from, to) in edits {
+        assert!(s.contains(from), "{from}");
+        s = s.replace(from, to);
+    }
+    std::fs::copy(
+        fixture("scenes/sphere_r0.3.obj"),
+        dir.path().join("sphere_r0.3.obj"),
+    )
+    .unwrap();
+    let path = dir.path().join("s.toml");
+    std::fs::write(&path, s).unwrap();
+    (dir, path)
+}
+
+/// Drapes the edited scene; asserts exit 1 within seconds, every part in the message, and
+/// nothing written.
+fn drape_refused(edits: &[(&str, &str)], parts: &[&str]) {
+    let (dir, path) = scene(edits);
+    let out = dir.path().join("out.obj");
+    let o = run_within(
+        &["drape", path.to_str().unwrap(), "-o", out.to_str().unwrap()],
+        Duration::from_secs(20),
+    );
+    let err = text(&o).1;
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    for p in parts {
+        assert!(err.contains(p), "expected {p:?} in: {err}");
+    }
+    assert!(!out.exists(), "nothing written");
+}
+
+#[test]
+fn hostile_collision_cells_beyond_the_limit_are_refused() {
+    drape_refused(
+        &[("cells = \"auto\"", "cells = [4096, 4096, 4096]")],
+        &["key 'collision.cells': [4096, 4096, 4096] is 68719476736 cells: at most 16777216"],
+    );
+}
+
+#[test]
+fn hostile_tiny_step_with_a_duration_is_refused() {
+    drape_refused(
+        &[
+            ("dt = 1e-4", "dt = 1e-300"),
+            (
+                "until_rest = 1e-5            # J of kinetic energy\nmax_steps = 40000",
+                "duration = 1.0",
+            ),
+        ],
+        &[
+            "key 'solver.duration'",
+            "solver.dt = 1e-300 s",
+            "at most 100000000",
+        ],
+    );
+}
+
+#[test]
+fn hostile_step_counts_beyond_the_limit_are_refused() {
+    drape_refused(
+        &[("max_steps = 40000", "max_steps = 100000000000")],
+        &["key 'solver.max_steps': 100000000000 steps: at most 100000000"],
+    );
+}
+
+#[test]
+fn hostile_spacing_near_the_particle_cap_is_refused_at_once() {
+    // 2.6 million particles: under the grid-node cap, but minutes and gigabytes to build.
+    drape_refused(
+        &[("spacing = 0.02", "spacing = 0.0005")],
+        &[
+            "key 'piece[1].spacing'",
+            "particles; at most 1000000: use a larger spacing",
+        ],
+    );
+}
+
+#[test]
+fn hostile_placement_at_1e308_ends() {
+    let (dir, path) = scene(&[
+        (
+            "position = [0.0, 0.0, 0.33]",
+            "position = [0.0, 0.0, 1e308]",
+        ),
+        (
+            "until_rest = 1e-5            # J of kinetic energy\nmax_steps = 40000",
+            "steps = 2",
+        ),
+    ]);
+    let out = dir.path().join("out.obj");
+    let o = run_within(
+        &["drape", path.to_str().unwrap(), "-o", out.to_str().unwrap()],
+        Duration::from_secs(60),
+    );
+    assert!(o.status.code().is_some(), "{}", text(&o).1);
+}
+
+fn fit_refused(extra: &[&str], parts: &[&str]) {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("x.obj");
+    let mut args = vec![
+        "fit",
+        "--measurements",
+        fixture_str("measurements_size38.toml"),
+        "-o",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    let o = run_within(&args, Duration::from_secs(20));
+    let err = text(&o).1;
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    for p in parts {
+        assert!(err.contains(p), "expected {p:?} in: {err}");
+    }
+    assert!(listing(d.path()).is_empty(), "nothing written");
+}
+
+fn fixture_str(name: &str) -> &'static str {
+    Box::leak(fixture(name).to_str().unwrap().to_string().into_boxed_str())
+}
+
+#[test]
+fn hostile_fit_node_counts_are_refused() {
+    fit_refused(
+        &["--nodes", "1000000000"],
+        &["--nodes 1000000000: at most 65536 nodes around each section"],
+    );
+    fit_refused(
+        &["--around", "100000", "--along", "100000"],
+        &["--around x --along 10000000000: at most 16777216 vertices of the form"],
+    );
+    fit_refused(
+        &["--levels", "1000000000"],
+        &["--levels 1000000000: at most 10000 sections"],
+    );
+}
+
+/// A regular tetrahedron scaled by `s`, as OBJ text.
+fn tetra(s: f64) -> String {
+    let p = [
+        [1.0, 1.0, 1.0],
+        [1.0, -1.0, -1.0],
+        [-1.0, 1.0, -1.0],
+        [-1.0, -1.0, 1.0],
+    ];
+    let mut t = String::new();
+    for q in p {
+        t += &format!("v {:e} {:e} {:e}\n", q[0] * s, q[1] * s, q[2] * s);
+    }
+    t + "f 1 2 3\nf 1 3 4\nf 1 4 2\nf 2 4 3\n"
+}
+
+#[test]
+fn hostile_tetrahedra_at_1e100_and_1e_minus_100_convert() {
+    for s in [1e100, 1e-100, 1e300] {
+        let d = tempfile::tempdir().unwrap();
+        let input = d.path().join("t.obj");
+        std::fs::write(&input, tetra(s)).unwrap();
+        let out = d.path().join("o.obj");
+        let o = run_within(
+            &[
+                "convert",
+                input.to_str().unwrap(),
+                "-o",
+                out.to_str().unwrap(),
+            ],
+            Duration::from_secs(20),
+        );
+        let err = text(&o).1;
+        assert!(!err.contains("collinear"), "{s}: {err}");
+        if s == 1e300 {
+            continue; // beyond what a volume holds: an answer or an error, quickly
+        }
+        assert_eq!(o.status.code(), Some(0), "{s}: {err}");
+        let faces = std::fs::read_to_string(&out)
+            .unwrap()
+            .lines()
+            .filter(|l| l.starts_with("f "))
+            .count();
+        assert_eq!(faces, 4, "{s}");
+    }
+}
