@@ -379,3 +379,33 @@ fn the_real_patterns_face_out_of_the_body() {
     }
     assert_eq!(panels, 32);
 }
+
+#[test]
+fn dress_pencil_gathers_its_bodice_into_the_skirt() {
+    // The bodice's bottom, 110 cm round, is sewn to the skirt's 84.3 cm waist: every waist
+    // stitch gathers by the same 1.30. The skirt's side seams ease a 24.8 cm back into a
+    // 23.6 cm front (5%). The shirt's stitches join edges of equal lengths.
+    let Some(root) = common::realdata() else {
+        return;
+    };
+    let read = |name: &str| {
+        drapekit::garment::read(&root.join(format!("patterns/{name}_specification.json"))).unwrap()
+    };
+    let g = drapekit::garment::gathers::gathers(&read("dress_pencil"));
+    let stitches: Vec<usize> = g.iter().map(|g| g.stitch).collect();
+    let waist: Vec<usize> = (15..=23).collect();
+    assert_eq!(stitches, [vec![6, 7], waist].concat(), "{g:?}");
+    for s in &g[..2] {
+        assert!((s.ratio - 1.0514).abs() < 1e-3, "{s:?}");
+    }
+    for s in &g[2..] {
+        assert!((s.ratio - 1.30).abs() < 0.005, "{s:?}");
+        assert!(
+            s.lengths_mm[0] > s.lengths_mm[1],
+            "the bodice's edge first: {s:?}"
+        );
+    }
+    let total: f64 = g[2..].iter().map(|s| s.lengths_mm[1]).sum();
+    assert!((total - 843.0).abs() < 1.0, "the skirt's waist: {total} mm");
+    assert!(drapekit::garment::gathers::gathers(&read("shirt_mean")).is_empty());
+}

@@ -29,6 +29,8 @@ pub enum BenchCommand {
     SelfContact(super::bench_self::SelfContactBench),
     /// The inside test on a closed body: ray crossings against the winding number.
     Inside(super::bench_inside::InsideBench),
+    /// The real patterns sewn and draped on the real bodies at 1 cm: time to rest, verdict.
+    Garment(super::bench_garment::GarmentBench),
 }
 
 /// Arguments of `drapekit bench fit`.
@@ -76,6 +78,7 @@ pub fn run(cmd: BenchCommand) -> anyhow::Result<()> {
         BenchCommand::Solver(a) => super::bench_solver::run(a),
         BenchCommand::SelfContact(a) => super::bench_self::run(a),
         BenchCommand::Inside(a) => super::bench_inside::run(a),
+        BenchCommand::Garment(a) => super::bench_garment::run(a),
     }
 }
 

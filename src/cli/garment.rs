@@ -105,6 +105,8 @@ pub struct GarmentReport {
     pub panels: Vec<Measures>,
     /// The stitches whose seams are not closed (gap above the verdict's limit), widest first.
     pub open_seams: Vec<measure::OpenSeam>,
+    /// The stitches that gather a longer edge into a shorter one (`garment::gathers`).
+    pub gathers: Vec<crate::garment::gathers::Gather>,
     /// The limits of the verdict.
     pub thresholds: Thresholds,
     /// `pass`, or `fail`.
@@ -119,7 +121,7 @@ pub struct GarmentReport {
 
 /// The body read, prepared, in metres (units from `spec`, or guessed from its height) and
 /// z up. Returns it and what was assumed.
-fn read_body(path: &Path, spec: &str) -> anyhow::Result<(TriMesh, String)> {
+pub(super) fn read_body(path: &Path, spec: &str) -> anyhow::Result<(TriMesh, String)> {
     let read = io::read_mesh(path, &ReadOptions::default())?;
     let mut mesh = read.mesh;
     prepare(&mut mesh, &PrepareOptions::default());
@@ -159,7 +161,7 @@ fn read_body(path: &Path, spec: &str) -> anyhow::Result<(TriMesh, String)> {
 }
 
 /// Checks the flags and builds the settings.
-fn settings(args: &GarmentArgs) -> anyhow::Result<GarmentSettings> {
+pub(super) fn settings(args: &GarmentArgs) -> anyhow::Result<GarmentSettings> {
     let fabric = Fabric::preset(&args.fabric).with_context(|| {
         let names: Vec<&str> = Fabric::presets().iter().map(|(n, _)| *n).collect();
         format!(
@@ -308,6 +310,43 @@ fn write_groups(
     Ok(())
 }
 
+/// A sewn and draped garment measured and judged.
+pub(super) struct Judged {
+    /// The fraction still moving (the drape's last frame).
+    pub moving: f64,
+    /// Per panel.
+    pub panels: Vec<Measures>,
+    /// The whole garment.
+    pub whole: Measures,
+    /// The verdict's limits.
+    pub thresholds: Thresholds,
+    /// What failed (empty: pass).
+    pub failed: Vec<String>,
+}
+
+/// Measures `g` and judges it by the default thresholds.
+pub(super) fn judge(g: &gd::Garment) -> Judged {
+    // The drape's last frame (1/60 s); a drape too short for one frame counts as moving.
+    let moving = g.drape.moving_fraction.unwrap_or(1.0);
+    let c = &g.world.colliders[0];
+    let inside: Vec<bool> = if c.closed {
+        g.world.state.x.iter().map(|p| sim::inside(c, p)).collect()
+    } else {
+        vec![false; g.world.model.len()]
+    };
+    let mut panels = measure::measures(&g.world, &g.seams, &inside);
+    let whole = panels.pop().expect("the whole garment");
+    let thresholds = Thresholds::default();
+    let failed = measure::verdict(&whole, moving, &thresholds);
+    Judged {
+        moving,
+        panels,
+        whole,
+        thresholds,
+        failed,
+    }
+}
+
 /// Runs `drapekit garment`.
 pub fn run(args: GarmentArgs) -> anyhow::Result<()> {
     let start = std::time::Instant::now();
@@ -332,18 +371,14 @@ pub fn run(args: GarmentArgs) -> anyhow::Result<()> {
     if super::interactive() {
         eprintln!();
     }
-    // The drape's last frame (1/60 s); a drape too short for one frame counts as moving.
-    let moving = g.drape.moving_fraction.unwrap_or(1.0);
+    let Judged {
+        moving,
+        panels,
+        whole,
+        thresholds,
+        failed,
+    } = judge(&g);
     let c = &g.world.colliders[0];
-    let inside: Vec<bool> = if c.closed {
-        g.world.state.x.iter().map(|p| sim::inside(c, p)).collect()
-    } else {
-        vec![false; g.world.model.len()]
-    };
-    let mut panels = measure::measures(&g.world, &g.seams, &inside);
-    let whole = panels.pop().expect("the whole garment");
-    let thresholds = Thresholds::default();
-    let failed = measure::verdict(&whole, moving, &thresholds);
     std::fs::create_dir_all(&args.output)
         .with_context(|| format!("cannot create {}", args.output.display()))?;
     let inputs = [args.pattern.as_path(), args.body.as_path()];
@@ -404,6 +439,7 @@ pub fn run(args: GarmentArgs) -> anyhow::Result<()> {
             &g.world.state.x,
             thresholds.seam_gap_max_mm,
         ),
+        gathers: crate::garment::gathers::gathers(&pattern),
         thresholds,
         verdict: if failed.is_empty() { "pass" } else { "fail" }.into(),
         failed,
@@ -474,6 +510,19 @@ fn print_summary(r: &GarmentReport) {
         println!(
             "    open seam: stitch {} ({} to {}), gap {:.1} mm",
             o.stitch, o.edges[0], o.edges[1], o.gap_max_mm
+        );
+    }
+    if let Some(g) = r.gathers.iter().max_by(|a, b| a.ratio.total_cmp(&b.ratio)) {
+        println!(
+            "  gathers: {} stitches join edges of different lengths, up to {:.0}% (stitch {}: \
+             {} of {:.1} mm and {} of {:.1} mm)",
+            r.gathers.len(),
+            (g.ratio - 1.0) * 100.0,
+            g.stitch,
+            g.edges[0],
+            g.lengths_mm[0],
+            g.edges[1],
+            g.lengths_mm[1]
         );
     }
 }

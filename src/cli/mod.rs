@@ -5,6 +5,7 @@
 mod bench;
 mod bench_drape;
 mod bench_fit;
+mod bench_garment;
 mod bench_inside;
 mod bench_self;
 mod bench_solver;

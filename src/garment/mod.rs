@@ -4,12 +4,14 @@
 //! edges in 2D with a rigid placement in 3D (`R (x, y, 0) + t`, `R = Rz Ry Rx` in degrees),
 //! and stitches that join pairs of edges. [`spec`] reads a file into a typed [`Pattern`] and
 //! reports every problem it finds; [`curve`] evaluates, measures and samples edge curves;
-//! [`sample`] samples the outlines with the two edges of every stitch paired point to point.
+//! [`sample`] samples the outlines with the two edges of every stitch paired point to point;
+//! [`gathers`] lists the stitches that join edges of different lengths.
 
 pub mod assemble;
 pub mod curve;
 pub mod drape;
 pub mod facing;
+pub mod gathers;
 pub mod lift;
 pub mod measure;
 pub mod sample;

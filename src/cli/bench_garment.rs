@@ -1,0 +1,147 @@
+//! `drapekit bench garment`: the real patterns sewn and draped on the real bodies, timed.
+//!
+//! The issue's set: the four GarmentCode patterns of `realdata/patterns/` on `mean_all.obj`,
+//! and `dress_pencil` also on `mean_female.obj`, at 1 cm in cotton with the `garment`
+//! command's defaults. Each row: particles, the two stages (simulated and wall seconds, the
+//! sewing's last seam gap, whether the drape came to rest), the whole wall time (sewing,
+//! drape and the measures) and the verdict with what failed. The goal is each garment at
+//! rest in at most 60 s of wall time. One run per garment (a garment takes tens of seconds to
+//! minutes): quote it with the load average.
+
+use super::garment::{judge, read_body};
+use crate::cloth::fabric::Fabric;
+use crate::garment::drape::{self as gd, GarmentSettings};
+use anyhow::Context;
+use serde::Serialize;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// Arguments of `drapekit bench garment`.
+#[derive(Debug, clap::Args)]
+pub struct GarmentBench {
+    /// The real data (its `patterns/` and `bodies/`); default: `../shared/realdata` beside the
+    /// repository.
+    #[arg(long, value_name = "DIR")]
+    pub realdata: Option<PathBuf>,
+    /// Only the runs whose pattern or body name contains this.
+    #[arg(long)]
+    pub only: Option<String>,
+    /// Particle spacing, m.
+    #[arg(long, default_value_t = 0.01)]
+    pub spacing: f64,
+    /// Longest drape after sewing, simulated s.
+    #[arg(long, default_value_t = 8.0)]
+    pub settle_max: f64,
+    /// The fabric preset.
+    #[arg(long, default_value = "cotton")]
+    pub fabric: String,
+    /// Print the results as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// The issue's runs: (pattern, body).
+pub const RUNS: [(&str, &str); 5] = [
+    ("dress_pencil", "mean_all"),
+    ("shirt_mean", "mean_all"),
+    ("hoody_mean", "mean_all"),
+    ("js_mean_all", "mean_all"),
+    ("dress_pencil", "mean_female"),
+];
+
+/// One garment's row.
+#[derive(Debug, Serialize)]
+pub struct GarmentRow {
+    /// The pattern's name.
+    pub pattern: String,
+    /// The body's name.
+    pub body: String,
+    /// Particles of the garment.
+    pub particles: usize,
+    /// Sewing: simulated s, and wall s.
+    pub sew_seconds: f64,
+    pub sew_wall_seconds: f64,
+    /// The widest seam gap when sewing ended, mm.
+    pub sew_gap_mm: f64,
+    /// The drape: simulated s, and wall s.
+    pub drape_seconds: f64,
+    pub drape_wall_seconds: f64,
+    /// Whether the drape came to rest (the verdict's test) before `--settle-max`.
+    pub at_rest: bool,
+    /// Sewing, drape and the measures, s.
+    pub wall_seconds: f64,
+    /// `pass` or `fail`, and what failed.
+    pub verdict: String,
+    pub failed: Vec<String>,
+}
+
+/// Runs the benchmark.
+pub fn run(a: GarmentBench) -> anyhow::Result<()> {
+    let dir = a
+        .realdata
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/realdata"));
+    let fabric = Fabric::preset(&a.fabric).with_context(|| format!("--fabric {}", a.fabric))?;
+    let mut settings = GarmentSettings::default();
+    settings.assemble.spacing = a.spacing;
+    settings.assemble.fabric = fabric;
+    settings.settle_max = a.settle_max;
+    let keep = |p: &str, b: &str| {
+        a.only
+            .as_ref()
+            .is_none_or(|o| p.contains(o) || b.contains(o))
+    };
+    let mut rows = Vec::new();
+    for (p, b) in RUNS.into_iter().filter(|(p, b)| keep(p, b)) {
+        let pattern_path = dir.join(format!("patterns/{p}_specification.json"));
+        let pattern = crate::garment::read(&pattern_path)?;
+        let (body, _) = read_body(&dir.join(format!("bodies/{b}.obj")), "auto")?;
+        let t = Instant::now();
+        let g = gd::sew_and_drape(&pattern, body, &settings, &|_| {})?;
+        let j = judge(&g);
+        let row = GarmentRow {
+            pattern: p.into(),
+            body: b.into(),
+            particles: g.world.model.len(),
+            sew_seconds: g.sew.time,
+            sew_wall_seconds: g.sew.wall_seconds,
+            sew_gap_mm: g.sew.seam_gap_max * 1e3,
+            drape_seconds: g.drape.time,
+            drape_wall_seconds: g.drape.wall_seconds,
+            at_rest: g.drape.done,
+            wall_seconds: t.elapsed().as_secs_f64(),
+            verdict: if j.failed.is_empty() { "pass" } else { "fail" }.into(),
+            failed: j.failed,
+        };
+        if !a.json {
+            print_row(&row);
+        }
+        rows.push(row);
+    }
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&rows)?);
+    }
+    Ok(())
+}
+
+/// One line per garment, then what failed.
+fn print_row(r: &GarmentRow) {
+    println!(
+        "{} on {}: {} particles; sewing {:.2} s ({:.1} s wall, gap {:.1} mm); drape {:.2} s \
+         ({:.1} s wall, {}); {:.1} s wall in all; {}",
+        r.pattern,
+        r.body,
+        r.particles,
+        r.sew_seconds,
+        r.sew_wall_seconds,
+        r.sew_gap_mm,
+        r.drape_seconds,
+        r.drape_wall_seconds,
+        if r.at_rest { "at rest" } else { "NOT at rest" },
+        r.wall_seconds,
+        r.verdict
+    );
+    for f in &r.failed {
+        println!("    {f}");
+    }
+}
