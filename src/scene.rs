@@ -24,7 +24,7 @@
 //! up = "y"                         # the mesh's up axis, rotated to z; also scale, translate
 //! friction = 0.3                   # this object's friction (default: the fabric's)
 //! [[piece]]
-//! name = "skirt"                   # default piece1, piece2, ...
+//! name = "skirt"                   # default piece1, piece2, ...; a file name (no / \ : ..)
 //! outline = [[-0.5, -0.5], [0.5, -0.5], [0.5, 0.5], [-0.5, 0.5]]
 //! holes = [[[-0.1, -0.1], [0.1, -0.1], [0.1, 0.1], [-0.1, 0.1]]]  # optional cut-outs
 //! spacing = 0.01
@@ -50,7 +50,7 @@ use crate::cloth::fabric::{Fabric, Kes};
 use crate::cloth::integrate::{Integrator, SolverSettings};
 use crate::cloth::pattern::{self, Pins};
 use crate::collide::grid::MAX_CELLS;
-use crate::math::{Point2, Vec3};
+use crate::math::{short, Point2, Vec3};
 use crate::mesh::transform::{Units, Up};
 use crate::sim::settings::{Cells, Stop};
 use serde::Deserialize;
@@ -396,21 +396,36 @@ impl Scene {
             Some(t) => (t / dt).round().max(1.0),
             None => self.stop.max_steps() as f64,
         };
-        if !(dt > 0.0 && dt.is_finite()) || steps > MAX_CHOSEN_STEPS as f64 {
-            return Err(SceneError::Key {
-                path: self.path.clone(),
-                key: "solver.dt".into(),
-                message: format!(
-                    "not given, and {} is stable for this cloth only below {:.3e} s: {:.3e} steps for the run (at most {MAX_CHOSEN_STEPS}). Use the default integrator (projective dynamics), or give dt",
-                    self.solver.integrator, stable_step, steps
-                ),
-            });
+        if !(dt > 0.0 && dt.is_finite()) {
+            return Err(self.no_step(format!(
+                "not given, and no stable step of {} can be estimated for this cloth (its stiffnesses and masses are out of range: check the fabric)",
+                self.solver.integrator
+            )));
+        }
+        if steps > MAX_CHOSEN_STEPS as f64 {
+            return Err(self.no_step(format!(
+                "not given, and {} is stable for this cloth only below {} s: {} steps for the run (at most {MAX_CHOSEN_STEPS}). Use the default integrator (projective dynamics), or give dt",
+                self.solver.integrator,
+                short(stable_step),
+                short(steps)
+            )));
         }
         self.solver.dt = dt;
         if self.duration.is_some() {
             self.stop = Stop::Steps(steps as u64);
         }
         Ok(())
+    }
+}
+
+impl Scene {
+    /// The error of a scene whose step cannot be chosen.
+    fn no_step(&self, message: String) -> SceneError {
+        SceneError::Key {
+            path: self.path.clone(),
+            key: "solver.dt".into(),
+            message,
+        }
     }
 }
 
@@ -438,7 +453,7 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
         if v.is_finite() && v > 0.0 {
             v
         } else {
-            bad(k, format!("must be a positive number, got {v}"));
+            bad(k, format!("must be a positive number, got {}", short(v)));
             stand_in
         }
     };
@@ -504,7 +519,7 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
         } else {
             bad(
                 "solver.cg_tolerance",
-                format!("must be a number in (0, 1), got {t}"),
+                format!("must be a number in (0, 1), got {}", short(t)),
             );
         }
     }
@@ -514,7 +529,7 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
         } else {
             bad(
                 "solver.strain_band",
-                format!("must be a strain in [0, 1), got {b}"),
+                format!("must be a strain in [0, 1), got {}", short(b)),
             );
         }
     }
@@ -539,7 +554,7 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
         } else {
             bad(
                 "solver.chebyshev",
-                format!("must be a spectral radius in (0, 1), got {r}"),
+                format!("must be a spectral radius in (0, 1), got {}", short(r)),
             );
         }
     }
@@ -584,7 +599,7 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
             if steps > MAX_STEPS as f64 {
                 bad(
                     "solver.duration",
-                    format!("{t} s at solver.dt = {dt:e} s is {steps:.3e} steps: at most {MAX_STEPS}; give a larger solver.dt or a shorter solver.duration"),
+                    format!("{} s at solver.dt = {dt:e} s is {steps:.3e} steps: at most {MAX_STEPS}; give a larger solver.dt or a shorter solver.duration", short(t)),
                 );
             }
             Stop::Steps(steps.min(MAX_STEPS as f64) as u64)
@@ -593,7 +608,7 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
             if !(e.is_finite() && e >= 0.0) {
                 bad(
                     "solver.until_rest",
-                    format!("must be a kinetic energy >= 0 (J), got {e}"),
+                    format!("must be a kinetic energy >= 0 (J), got {}", short(e)),
                 );
             }
             Stop::UntilRest {
@@ -664,7 +679,10 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
         finite(&k("translate"), &translate);
         if let Some(fr) = o.friction {
             if !(0.0..=1.0).contains(&fr) {
-                bad(&k("friction"), format!("must be within 0..1, got {fr}"));
+                bad(
+                    &k("friction"),
+                    format!("must be within 0..1, got {}", short(fr)),
+                );
             }
         }
         let name = o.name.clone().unwrap_or_else(|| {
@@ -797,12 +815,25 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
             None => 0.0,
             Some(r) if r.is_finite() && r >= 0.0 => r * to_m,
             Some(r) => {
-                bad(&k("pin_radius"), format!("must be a length >= 0, got {r}"));
+                bad(
+                    &k("pin_radius"),
+                    format!("must be a length >= 0, got {}", short(r)),
+                );
                 0.0
             }
         };
+        let name = p.name.clone().unwrap_or_else(|| format!("piece{}", i + 1));
+        if !crate::io::is_safe_file_name(&name) {
+            bad(
+                &k("name"),
+                format!(
+                    "{name:?} cannot be a file name in the output folder (the piece is written as <name>.obj): {}",
+                    crate::io::FILE_NAME_RULE
+                ),
+            );
+        }
         pieces.push(PieceSpec {
-            name: p.name.clone().unwrap_or_else(|| format!("piece{}", i + 1)),
+            name,
             outline,
             holes,
             spacing,

@@ -138,6 +138,23 @@ pub struct ConvertReport {
     pub prepare: PrepareReport,
 }
 
+/// Flags given that change nothing: `--ascii` for a text format, `--units` without `--to-units`,
+/// `--up` without `--to-up` (clap already refuses the reverse).
+fn idle_flags(args: &ConvertArgs, out_format: Format) -> Vec<String> {
+    let mut w: Vec<String> = super::ascii_warning(args.ascii, out_format)
+        .into_iter()
+        .collect();
+    if args.units.is_some() && args.to_units.is_none() {
+        w.push(
+            "--units does nothing without --to-units (convert scales from one to the other)".into(),
+        );
+    }
+    if args.up.is_some() && args.to_up.is_none() {
+        w.push("--up does nothing without --to-up (convert rotates from one to the other)".into());
+    }
+    w
+}
+
 /// Runs `drapekit convert`.
 pub fn run(args: ConvertArgs) -> anyhow::Result<()> {
     let start = Instant::now();
@@ -147,6 +164,7 @@ pub fn run(args: ConvertArgs) -> anyhow::Result<()> {
         ascii: args.ascii,
     };
     let out_format = io::output_format(&args.output, &wopts)?;
+    super::warn(&idle_flags(&args, out_format));
     if let Some(r) = &args.report {
         if r == &args.output {
             bail!("--report {} is the output mesh path", r.display());

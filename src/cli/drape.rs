@@ -130,8 +130,11 @@ pub struct DrapeReport {
     pub phases: Phases,
     /// Particles in contact with an object at the end.
     pub contacts_end: usize,
-    /// Particles inside closed objects at the end.
-    pub particles_inside: usize,
+    /// Particles inside closed objects at the end (`null` when every object is open: no inside
+    /// test applies to an open surface).
+    pub particles_inside: Option<usize>,
+    /// Objects with no inside test (open surfaces).
+    pub open_objects: Vec<String>,
     /// Smallest particle distance to any object at the end.
     pub min_clearance: Option<f64>,
     /// Largest strain (edge length over rest length, minus one).
@@ -152,6 +155,62 @@ pub struct DrapeReport {
     pub pieces: Vec<PieceReport>,
     /// Wall time of the whole command, s.
     pub command_seconds: f64,
+}
+
+/// Whether the output directory and its `frames/` existed before the run.
+#[derive(Debug, Clone, Copy)]
+struct Existed {
+    out: bool,
+    frames: bool,
+}
+
+/// After a failed run: removes the staged temporary files, and the directories the run created
+/// (when empty). Files of an earlier run were never touched.
+fn abandon(staged: Vec<io::Staged>, out: &Path, existed: Existed) {
+    drop(staged);
+    if !existed.frames {
+        let _ = std::fs::remove_dir(out.join("frames"));
+    }
+    if !existed.out {
+        let _ = std::fs::remove_dir(out);
+    }
+}
+
+/// Stages each piece's mesh (`OUT/<piece>.obj`, and `.ply` on request) into `staged`; returns
+/// the pieces' reports.
+fn stage_pieces(
+    sc: &scene::Scene,
+    world: &World,
+    out: &Path,
+    inputs: &[&Path],
+    staged: &mut Vec<io::Staged>,
+) -> anyhow::Result<Vec<PieceReport>> {
+    std::fs::create_dir_all(out)
+        .map_err(|e| anyhow::anyhow!("cannot create {}: {e}", out.display()))?;
+    let to_units = Units::factor(Units::M, sc.units);
+    let exts: &[&str] = if sc.ply { &["obj", "ply"] } else { &["obj"] };
+    let mut pieces = Vec::new();
+    for (i, p) in sc.pieces.iter().enumerate() {
+        let mesh = piece_mesh(world, i, to_units);
+        let mut files = Vec::new();
+        for ext in exts {
+            let path = out.join(format!("{}.{ext}", p.name));
+            let (f, _) = io::stage_mesh(&path, &mesh, &WriteOptions::default(), inputs)?;
+            staged.push(f);
+            files.push(path.display().to_string());
+        }
+        let r = &world.model.pieces[i];
+        pieces.push(PieceReport {
+            name: p.name.clone(),
+            fabric: p.fabric_name.clone(),
+            particles: r.count,
+            triangles: r.triangles,
+            area: r.area * to_units * to_units,
+            drape_coefficient: sc.disc_radius.map(|d| sim::drape_coefficient(world, i, d)),
+            files,
+        });
+    }
+    Ok(pieces)
 }
 
 fn piece_mesh(world: &World, piece: usize, to_units: f64) -> TriMesh {
@@ -180,19 +239,15 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
             out.display()
         );
     }
-    // Nothing is created until there is something to write; a failed run removes what it wrote.
-    let out_existed = out.exists();
-    let written = std::cell::RefCell::new(Vec::<PathBuf>::new());
-    let cleanup = || {
-        for f in written.borrow().iter() {
-            let _ = std::fs::remove_file(f);
-        }
-        let _ = std::fs::remove_dir(out.join("frames"));
-        if !out_existed {
-            let _ = std::fs::remove_dir(out);
-        }
+    // Nothing is created until there is something to write. Every output (frames, pieces) is
+    // staged in a temporary file and renamed into place only when the run has succeeded: a failed
+    // run leaves an earlier run's files as they were.
+    let existed = Existed {
+        out: out.exists(),
+        frames: out.join("frames").exists(),
     };
-    let to_units = crate::mesh::transform::Units::factor(Units::M, sc.units);
+    let staged = std::cell::RefCell::new(Vec::<io::Staged>::new());
+    let to_units = Units::factor(Units::M, sc.units);
     let inputs: Vec<&Path> = std::iter::once(sc.path.as_path())
         .chain(sc.objects.iter().map(|o| o.mesh.as_path()))
         .collect();
@@ -216,7 +271,7 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
         })?;
         for (i, name) in names.iter().enumerate() {
             let p = frames_dir.join(format!("{name}_{step:07}.obj"));
-            io::write_mesh(
+            let (f, _) = io::stage_mesh(
                 &p,
                 &piece_mesh(w, i, to_units),
                 &WriteOptions::default(),
@@ -226,7 +281,7 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
                 step,
                 message: e.to_string(),
             })?;
-            written.borrow_mut().push(p);
+            staged.borrow_mut().push(f);
         }
         Ok(false)
     };
@@ -241,45 +296,25 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
     if let Some(b) = &bar {
         b.finish_and_clear();
     }
+    let mut staged = staged.into_inner();
     let stats = match stats {
         Ok(s) => s,
         Err(e) => {
-            cleanup();
+            abandon(staged, out, existed);
             return Err(e.into());
         }
     };
-    if let Err(e) = std::fs::create_dir_all(out) {
-        cleanup();
-        anyhow::bail!("cannot create {}: {e}", out.display());
-    }
-    let mut pieces = Vec::new();
-    for (i, p) in sc.pieces.iter().enumerate() {
-        let mesh = piece_mesh(&world, i, to_units);
-        let mut files = Vec::new();
-        for ext in if sc.ply {
-            vec!["obj", "ply"]
-        } else {
-            vec!["obj"]
-        } {
-            let path = out.join(format!("{}.{ext}", p.name));
-            if let Err(e) = io::write_mesh(&path, &mesh, &WriteOptions::default(), &inputs) {
-                cleanup();
-                return Err(e.into());
-            }
-            written.borrow_mut().push(path.clone());
-            files.push(path.display().to_string());
+    let pieces = match stage_pieces(&sc, &world, out, &inputs, &mut staged).and_then(|p| {
+        io::commit(std::mem::take(&mut staged))
+            .map(|()| p)
+            .map_err(Into::into)
+    }) {
+        Ok(p) => p,
+        Err(e) => {
+            abandon(staged, out, existed);
+            return Err(e);
         }
-        let r = &world.model.pieces[i];
-        pieces.push(PieceReport {
-            name: p.name.clone(),
-            fabric: p.fabric_name.clone(),
-            particles: r.count,
-            triangles: r.triangles,
-            area: r.area * to_units * to_units,
-            drape_coefficient: sc.disc_radius.map(|d| sim::drape_coefficient(&world, i, d)),
-            files,
-        });
-    }
+    };
     let inside = sim::particles_inside(&world);
     let clearance = sim::min_clearance(&world);
     let objects: Vec<ObjectReport> = world
@@ -332,7 +367,12 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
             pd_iterations: stats.solver.pd_iterations,
         },
         contacts_end: world.state.contact.iter().filter(|c| c.is_some()).count(),
-        particles_inside: inside.iter().flatten().sum(),
+        particles_inside: inside_total(&inside),
+        open_objects: objects
+            .iter()
+            .filter(|o| !o.closed)
+            .map(|o| o.name.clone())
+            .collect(),
         min_clearance: objects.iter().map(|o| o.min_clearance).reduce(f64::min),
         max_strain,
         mean_strain,
@@ -357,6 +397,25 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
         args.json,
         print_summary,
     )
+}
+
+/// Particles inside the closed objects, from each object's count (`None` for an open one);
+/// `None` when there are objects and none is closed.
+fn inside_total(per_object: &[Option<usize>]) -> Option<usize> {
+    if !per_object.is_empty() && per_object.iter().all(Option::is_none) {
+        return None;
+    }
+    Some(per_object.iter().flatten().sum())
+}
+
+/// The summary's count of particles inside objects, with the open objects (no inside test) named.
+fn inside_text(r: &DrapeReport) -> String {
+    let open = r.open_objects.join(", ");
+    match r.particles_inside {
+        None => format!("particles inside objects n/a (open: {open})"),
+        Some(n) if open.is_empty() => format!("particles inside objects {n}"),
+        Some(n) => format!("particles inside closed objects {n} (n/a for open: {open})"),
+    }
 }
 
 /// The step for the summary: as the scene gave it, or chosen from the estimate (and said so).
@@ -391,11 +450,11 @@ fn print_summary(r: &DrapeReport) {
         r.wall_seconds, r.collision_seconds, r.contacts_end
     );
     println!(
-        "  strain max {:.4} mean {:.4}; kinetic energy {:.3e} J; particles inside objects {}; min clearance {}",
+        "  strain max {:.4} mean {:.4}; kinetic energy {:.3e} J; {}; min clearance {}",
         r.max_strain,
         r.mean_strain,
         r.kinetic_energy_end,
-        r.particles_inside,
+        inside_text(r),
         r.min_clearance.map_or("-".into(), |c| format!("{c:.4e}"))
     );
     for p in &r.pieces {

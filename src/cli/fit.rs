@@ -187,6 +187,7 @@ fn load(args: &FitArgs) -> Result<Source, FitError> {
             p.display()
         )));
     }
+    crate::fit::scan::check_up(&body, args.up, p)?;
     prepare(&mut body, &PrepareOptions::default());
     change_up(&mut body, args.up, Up::Z);
     let opts = ScanOptions {
@@ -214,7 +215,11 @@ pub fn run(args: FitArgs) -> anyhow::Result<()> {
         format: args.format,
         ascii: args.ascii,
     };
-    io::output_format(&args.output, &wopts)?;
+    super::warn(
+        &super::ascii_warning(args.ascii, io::output_format(&args.output, &wopts)?)
+            .into_iter()
+            .collect::<Vec<_>>(),
+    );
     if args.measurements.is_none() && args.levels.is_some() && args.from_mesh.is_none() {
         anyhow::bail!("--levels applies to --measurements and --from-mesh; a sections file has its own sections");
     }

@@ -236,20 +236,15 @@ fn check_panel_names(pattern: &crate::garment::spec::Pattern, path: &Path) -> an
         .panels
         .iter()
         .map(|p| &p.name)
-        .filter(|n| {
-            n.is_empty()
-                || *n == "."
-                || *n == ".."
-                || n.chars()
-                    .any(|c| matches!(c, '/' | '\\' | ':') || c.is_control())
-        })
+        .filter(|n| !crate::io::is_safe_file_name(n))
         .map(|n| format!("{n:?}"))
         .collect();
     if !bad.is_empty() {
         bail!(
-            "{}: panel names {} cannot be file names for --panels (no '/', '\\', ':', control characters, '.' or '..')",
+            "{}: panel names {} cannot be file names for --panels: {}",
             path.display(),
-            bad.join(", ")
+            bad.join(", "),
+            crate::io::FILE_NAME_RULE
         );
     }
     Ok(())

@@ -120,6 +120,20 @@ pub fn main() -> ExitCode {
     }
 }
 
+/// The warning for `--ascii` with an output format that is text whatever the flag says (OBJ,
+/// vertex triples); `None` when the flag chooses something (STL, PLY) or was not given.
+pub fn ascii_warning(ascii: bool, format: Format) -> Option<String> {
+    (ascii && matches!(format, Format::Obj | Format::Triples))
+        .then(|| format!("--ascii does nothing for {format} output ({format} is always text): it applies to STL and PLY"))
+}
+
+/// Prints each warning on stderr.
+pub fn warn(warnings: &[String]) {
+    for w in warnings {
+        eprintln!("warning: {w}");
+    }
+}
+
 /// Whether progress bars may be drawn (stderr is a terminal).
 pub fn interactive() -> bool {
     std::io::stderr().is_terminal()

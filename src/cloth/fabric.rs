@@ -29,6 +29,7 @@
 //! May-Plumlee, *Journal of Textile and Apparel Technology and Management* 4(3), 2005), not the
 //! measurement of one particular cloth. Give your own with a `[fabric.NAME]` table.
 
+use crate::math::short;
 use serde::Serialize;
 
 /// A fabric (SI units).
@@ -201,7 +202,7 @@ impl Fabric {
         let mut out = Vec::new();
         let mut pos = |name: &'static str, v: f64| {
             if !(v.is_finite() && v > 0.0) {
-                out.push((name, format!("must be a positive number, got {v}")));
+                out.push((name, format!("must be a positive number, got {}", short(v))));
             }
         };
         pos("density", self.density);
@@ -215,13 +216,13 @@ impl Fabric {
             ("thickness", self.thickness),
         ] {
             if !(v.is_finite() && v >= 0.0) {
-                out.push((name, format!("must be a number >= 0, got {v}")));
+                out.push((name, format!("must be a number >= 0, got {}", short(v))));
             }
         }
         if !(0.0..=1.0).contains(&self.friction) {
             out.push((
                 "friction",
-                format!("must be within 0..1, got {}", self.friction),
+                format!("must be within 0..1, got {}", short(self.friction)),
             ));
         }
         out

@@ -40,21 +40,21 @@ pub enum FitError {
     #[error("{found} section(s): a surface needs at least 3 at different heights")]
     TooFewSections { found: usize },
     /// A section with too few distinct points.
-    #[error("section {section} (height {height}): {found} distinct point(s); a section needs at least 3")]
+    #[error("section {section} (height {h}): {found} distinct point(s); a section needs at least 3", h = crate::math::short(*height))]
     TooFewPoints {
         section: usize,
         height: f64,
         found: usize,
     },
     /// A section with no area.
-    #[error("section {section} (height {height}) is degenerate: its points are collinear (area {area:e})")]
+    #[error("section {section} (height {h}) is degenerate: its points are collinear (area {area:.3e})", h = crate::math::short(*height))]
     Degenerate {
         section: usize,
         height: f64,
         area: f64,
     },
     /// Two different sections at one height.
-    #[error("sections {first} and {second} are both at height {height} but differ: give one section per height")]
+    #[error("sections {first} and {second} are both at height {h} but differ: give one section per height", h = crate::math::short(*height))]
     DuplicateHeight {
         first: usize,
         second: usize,
@@ -70,6 +70,16 @@ pub enum FitError {
         height: f64,
         reason: String,
     },
+    /// A body mesh is clearly longer along another axis than along the up axis it was given
+    /// (`--up`, default z): a standing body is tallest along its up axis.
+    #[error("{}: the body is {e} long along {longest} but only {h} along the up axis {given} (--up {given}): a standing body is tallest along its up axis; {advice}", path.display(), e = crate::math::short(*extent), h = crate::math::short(*height), advice = up_advice(*longest))]
+    UpAxis {
+        path: PathBuf,
+        given: crate::mesh::transform::Up,
+        height: f64,
+        longest: char,
+        extent: f64,
+    },
     /// A mesh could not be read.
     #[error(transparent)]
     Mesh(#[from] crate::io::IoError),
@@ -84,4 +94,12 @@ pub enum FitError {
     /// Options that cannot work together.
     #[error("{0}")]
     Options(String),
+}
+
+/// What to do when a body is tallest along `axis` (x, y or z) and another up axis was given.
+fn up_advice(axis: char) -> String {
+    match axis {
+        'y' | 'z' => format!("give --up {axis}"),
+        _ => "drapekit reads y-up and z-up bodies: rotate it to stand along y or z".into(),
+    }
 }

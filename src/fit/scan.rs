@@ -12,11 +12,15 @@
 //! or whose torso loop swallows another loop of the level before it (an arm joining at the
 //! armpit: any loop of at least 1% of the torso's area), stops the fit with an error naming the
 //! level, so the user can narrow `--from`/`--to`.
+//!
+//! **The up axis.** Before slicing, [`check_up`] refuses a body clearly longer along another axis
+//! than along the up axis it was given (a Y-up body read as Z-up would be sliced lengthwise).
 
 use super::error::FitError;
 use super::section::{centroid, signed_area2, Section};
 use crate::math::Point2;
 use crate::mesh::slice::slice;
+use crate::mesh::transform::Up;
 use crate::mesh::TriMesh;
 
 /// Where to slice a scan.
@@ -44,6 +48,34 @@ impl Default for ScanOptions {
 pub const DEFAULT_BAND: (f64, f64) = (0.48, 0.74);
 
 pub use crate::geom::contains;
+
+/// A standing body is tallest along its up axis: a body longer than this many times its extent
+/// along the given up axis, along another axis, was given the wrong up axis (ratio of lengths).
+pub const UP_AXIS_RATIO: f64 = 1.5;
+
+/// Checks that `body` (as read, before any rotation) is not clearly taller along another axis than
+/// along `up`: longer by more than [`UP_AXIS_RATIO`] means the up axis is wrong.
+pub fn check_up(body: &TriMesh, up: Up, path: &std::path::Path) -> Result<(), FitError> {
+    let Some(b) = body.bbox() else {
+        return Ok(());
+    };
+    let size = b.size();
+    let k = match up {
+        Up::Y => 1,
+        Up::Z => 2,
+    };
+    let longest = size.imax();
+    if longest != k && size[longest] > UP_AXIS_RATIO * size[k] {
+        return Err(FitError::UpAxis {
+            path: path.to_path_buf(),
+            given: up,
+            height: size[k],
+            longest: ['x', 'y', 'z'][longest],
+            extent: size[longest],
+        });
+    }
+    Ok(())
+}
 
 /// The torso sections of a Z-up body mesh, and the band `(from, to)` they span.
 pub fn torso_sections(
@@ -142,4 +174,33 @@ pub fn torso_sections(
         })
         .collect();
     Ok((sections, (from, to)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::Point3;
+
+    /// A cube stretched to `x` by `y` by `z`.
+    fn block(x: f64, y: f64, z: f64) -> TriMesh {
+        let mut m = crate::mesh::generate::cube(1.0);
+        for p in &mut m.positions {
+            *p = Point3::new(p.x * x, p.y * y, p.z * z);
+        }
+        m
+    }
+
+    #[test]
+    fn a_body_taller_along_another_axis_is_refused_naming_it() {
+        let path = std::path::Path::new("b.obj");
+        assert!(check_up(&block(0.4, 0.3, 1.7), Up::Z, path).is_ok());
+        assert!(check_up(&block(0.4, 1.7, 0.3), Up::Y, path).is_ok());
+        // Arms out (a T pose): wide, but not clearly wider than tall.
+        assert!(check_up(&block(1.6, 0.3, 1.7), Up::Z, path).is_ok());
+        let e = check_up(&block(0.4, 1.7, 0.3), Up::Z, path).unwrap_err();
+        assert!(matches!(e, FitError::UpAxis { longest: 'y', .. }), "{e}");
+        assert!(e.to_string().ends_with("give --up y"), "{e}");
+        let e = check_up(&block(1.7, 0.3, 0.3), Up::Y, path).unwrap_err();
+        assert!(e.to_string().contains("rotate it"), "{e}");
+    }
 }

@@ -5,7 +5,9 @@
 //! non-finite coordinates and name the line (text) or byte offset (binary) of every problem.
 //! [`write_mesh`] and [`write_atomic`] write to a temporary file beside the target and rename
 //! it into place, so a failed write never leaves a half-written file, and refuse to overwrite
-//! an input.
+//! an input. [`stage_mesh`] and [`stage`] stop before the rename: [`commit`] renames several
+//! outputs together at the end of a run, so a run that fails earlier changes none of them.
+//! [`is_safe_file_name`] keeps names that become file names inside an output folder.
 //!
 //! The readers are drapekit's own: tobj 4.0.5, stl_io 0.10 and ply-rs fail or misread files
 //! in `shared/realdata/meshes` (see `READER_PROBE.tsv` there and the README), and their errors
@@ -293,6 +295,18 @@ pub fn write_mesh(
     opts: &WriteOptions,
     inputs: &[&Path],
 ) -> Result<Format, IoError> {
+    let (staged, format) = stage_mesh(path, mesh, opts, inputs)?;
+    staged.commit()?;
+    Ok(format)
+}
+
+/// Writes `mesh` for `path` into a temporary file beside it, left [`Staged`] (see [`commit`]).
+pub fn stage_mesh(
+    path: &Path,
+    mesh: &TriMesh,
+    opts: &WriteOptions,
+    inputs: &[&Path],
+) -> Result<(Staged, Format), IoError> {
     let format = output_format(path, opts)?;
     if let Some(v) = mesh
         .positions
@@ -304,7 +318,7 @@ pub fn write_mesh(
             vertex: v,
         });
     }
-    write_atomic(path, inputs, |w| match format {
+    let staged = stage(path, inputs, |w| match format {
         Format::Triples => triples::write(w, mesh),
         Format::Obj => obj::write(w, mesh),
         Format::Stl if opts.ascii => stl::write_ascii(w, mesh),
@@ -328,7 +342,7 @@ pub fn write_mesh(
         }
         e => e,
     })?;
-    Ok(format)
+    Ok((staged, format))
 }
 
 /// Whether two paths name the same existing file.
@@ -351,6 +365,57 @@ pub fn same_file(a: &Path, b: &Path) -> bool {
 /// error the temporary file is removed and `path` is untouched. Refuses when `path` is one of
 /// `inputs`.
 pub fn write_atomic<F>(path: &Path, inputs: &[&Path], body: F) -> Result<(), IoError>
+where
+    F: FnOnce(&mut BufWriter<&std::fs::File>) -> std::io::Result<()>,
+{
+    stage(path, inputs, body)?.commit()
+}
+
+/// An output written in full to a temporary file beside its target, not yet renamed into place.
+/// Dropped uncommitted, the temporary file is removed and the target never changes; [`commit`]
+/// puts several into place together, so a run that fails before then changes none of them.
+#[derive(Debug)]
+pub struct Staged {
+    tmp: tempfile::TempPath,
+    path: PathBuf,
+}
+
+impl Staged {
+    /// The target.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Renames the temporary file to the target.
+    pub fn commit(self) -> Result<(), IoError> {
+        let path = self.path;
+        self.tmp.persist(&path).map_err(|e| IoError::Write {
+            path,
+            source: e.error,
+        })
+    }
+}
+
+/// Puts every staged output into place, after checking that no target is a directory or another
+/// non-file (the one way a rename fails that a check can foresee): a refused target leaves every
+/// target as it was.
+pub fn commit(staged: Vec<Staged>) -> Result<(), IoError> {
+    for s in &staged {
+        if let Ok(m) = std::fs::symlink_metadata(&s.path) {
+            if !m.is_file() {
+                return Err(IoError::Write {
+                    path: s.path.clone(),
+                    source: std::io::Error::other("exists and is not a file"),
+                });
+            }
+        }
+    }
+    staged.into_iter().try_for_each(Staged::commit)
+}
+
+/// Writes through `body` into a temporary file beside `path` (closed when done) and returns it
+/// staged. Refuses when `path` is one of `inputs`.
+pub fn stage<F>(path: &Path, inputs: &[&Path], body: F) -> Result<Staged, IoError>
 where
     F: FnOnce(&mut BufWriter<&std::fs::File>) -> std::io::Result<()>,
 {
@@ -394,13 +459,62 @@ where
             .set_permissions(std::fs::Permissions::from_mode(mode))
             .map_err(werr)?;
     }
-    tmp.persist(path).map_err(|e| werr(e.error))?;
-    Ok(())
+    Ok(Staged {
+        tmp: tmp.into_temp_path(),
+        path: path.to_path_buf(),
+    })
+}
+
+/// What a name written as a file name inside an output folder may not be: empty, `.` or `..`,
+/// or hold a path separator (`/`, `\`), a drive colon (`:`) or a control character. Such a name
+/// could write outside the folder (`/tmp/x`, `../x`) or nowhere.
+pub const FILE_NAME_RULE: &str =
+    "not empty, not '.' or '..', no '/', '\\', ':' or control characters";
+
+/// Whether `name` can be a file name (before its extension) inside an output folder: see
+/// [`FILE_NAME_RULE`].
+pub fn is_safe_file_name(name: &str) -> bool {
+    !(name.is_empty()
+        || name == "."
+        || name == ".."
+        || name
+            .chars()
+            .any(|c| matches!(c, '/' | '\\' | ':') || c.is_control()))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn names_that_leave_the_folder_are_not_file_names() {
+        for bad in ["", ".", "..", "/tmp/x", "../x", "a\\b", "c:x", "a\nb"] {
+            assert!(!is_safe_file_name(bad), "{bad:?}");
+        }
+        for good in ["skirt", "front panel", ".hidden", "a..b", "piece-1"] {
+            assert!(is_safe_file_name(good), "{good:?}");
+        }
+    }
+
+    #[test]
+    fn a_commit_refused_for_one_target_changes_none() {
+        let dir = tempfile::tempdir().unwrap();
+        let (a, b) = (dir.path().join("a.txt"), dir.path().join("b.txt"));
+        std::fs::write(&a, "old").unwrap();
+        std::fs::create_dir(&b).unwrap();
+        let staged = [&a, &b]
+            .map(|p| stage(p, &[], |w| w.write_all(b"new")).unwrap())
+            .into_iter()
+            .collect();
+        assert!(commit(staged).is_err());
+        assert_eq!(std::fs::read_to_string(&a).unwrap(), "old");
+        let mut names: Vec<_> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().into_string().unwrap())
+            .collect();
+        names.sort();
+        assert_eq!(names, ["a.txt", "b.txt"], "no temporary file left");
+    }
 
     #[test]
     fn sniffing() {
