@@ -166,27 +166,22 @@ impl<'a> ClosestPoints<'a> {
         for shell in 0..=max_shell {
             // Cells of shell s are at least (s - 1) cells from the projection, hence from p.
             let reach = ((shell as f64 - 1.0).max(0.0) * self.cell).max(outside);
-            // An infinite reach (p at 1e308: its distance overflows) can find nothing nearer.
-            if reach > best.distance || reach == f64::INFINITY {
+            // Nothing in this shell is nearer than `reach` (so none beats a best distance equal
+            // to it: a point over a flat sheet, whose reach stays at its height for many shells);
+            // an infinite reach (p at 1e308: its distance overflows) can find nothing nearer.
+            if reach >= best.distance || reach == f64::INFINITY {
                 break;
             }
             let s = shell;
-            for dk in -s..=s {
-                for dj in -s..=s {
-                    for di in -s..=s {
+            // The shell's offsets along axis a that stay in the grid.
+            let span = |a: usize| (-s).max(-home[a])..=s.min(dims[a] as i64 - 1 - home[a]);
+            for dk in span(2) {
+                for dj in span(1) {
+                    for di in span(0) {
                         if di.abs() != s && dj.abs() != s && dk.abs() != s {
                             continue;
                         }
                         let (i, j, k) = (home[0] + di, home[1] + dj, home[2] + dk);
-                        if i < 0
-                            || j < 0
-                            || k < 0
-                            || i >= dims[0] as i64
-                            || j >= dims[1] as i64
-                            || k >= dims[2] as i64
-                        {
-                            continue;
-                        }
                         let c = i as usize + dims[0] * (j as usize + dims[1] * k as usize);
                         for &f in &self.faces[self.start[c] as usize..self.start[c + 1] as usize] {
                             let [a, b, cc] = self.mesh.corners(f as usize);
@@ -247,13 +242,10 @@ mod tests {
             assert!((q.closest(&p).distance - brute).abs() < 1e-12);
         }
     }
-    /// A point at 1e308 is infinitely far (its distance overflows): the answer comes at once,
-    /// without visiting every shell of cells (on a 513-cell strip, 10^11 cells: a hang).
-    #[test]
-    fn hostile_point_at_1e308_ends() {
-        let (nx, ny) = (1000u32, 60u32);
+    /// A flat sheet in z = 0 of `nx` x `ny` squares of side `h`, two triangles each.
+    fn flat_sheet(nx: u32, ny: u32, h: f64) -> TriMesh {
         let positions = (0..=ny)
-            .flat_map(|j| (0..=nx).map(move |i| Point3::new(0.1 * i as f64, 0.1 * j as f64, 0.0)))
+            .flat_map(|j| (0..=nx).map(move |i| Point3::new(h * i as f64, h * j as f64, 0.0)))
             .collect();
         let v = |i: u32, j: u32| j * (nx + 1) + i;
         let faces = (0..ny)
@@ -266,7 +258,33 @@ mod tests {
                 })
             })
             .collect();
-        let m = TriMesh::new(positions, faces);
+        TriMesh::new(positions, faces)
+    }
+
+    /// A point over a flat sheet (a grid one cell thick) is answered from the first shells: the
+    /// search used to go on while the shells' reach equalled the point's height, visiting
+    /// (2s+1)^3 offsets per shell out to the grid's edge (minutes for this 600 x 600 sheet).
+    #[test]
+    fn a_point_over_a_flat_sheet_ends_at_once() {
+        let sheet = flat_sheet(600, 600, 1.0 / 600.0);
+        let q = ClosestPoints::new(&sheet);
+        assert_eq!(q.dims[2], 1, "{:?}", q.dims);
+        assert!(q.dims[0] > 200, "{:?}", q.dims);
+        for (x, y, h) in [(0.5, 0.5, 0.3), (0.01, 0.99, 2.0), (1.5, 0.5, 0.1)] {
+            let hit = q.closest(&Point3::new(x, y, h));
+            let dx: f64 = x - 1.0f64.min(x);
+            assert!(
+                (hit.distance - (h * h + dx * dx).sqrt()).abs() < 1e-12,
+                "{x} {y} {h}: {hit:?}"
+            );
+        }
+    }
+
+    /// A point at 1e308 is infinitely far (its distance overflows): the answer comes at once,
+    /// without visiting every shell of cells (on a 513-cell strip, 10^11 cells: a hang).
+    #[test]
+    fn hostile_point_at_1e308_ends() {
+        let m = flat_sheet(1000, 60, 0.1);
         let q = ClosestPoints::new(&m);
         assert!(q.dims[0] > 500, "{:?}", q.dims);
         let h = q.closest(&Point3::new(1e308, 0.0, 0.0));
