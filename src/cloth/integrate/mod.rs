@@ -91,7 +91,18 @@ impl Integrator {
 
     /// What to do when a run with this integrator went unstable, for the scene's estimated
     /// largest stable step `estimate` and highest frequency `w`.
+    /// A step estimate that is zero, negative or not a number (a fabric with a non-finite or
+    /// zero stiffness or mass) gives no step to advise: the advice says to check the fabric.
     pub fn advice(self, estimate: f64, w: f64) -> String {
+        let usable = |dt: f64| dt.is_finite() && dt > 0.0;
+        let leapfrog = Integrator::Leapfrog.stable_step(w, 0.0);
+        if self.is_explicit() && !(usable(estimate) && usable(leapfrog)) {
+            return format!(
+                "no stable step can be estimated for this cloth (estimate {} s): check the \
+                 fabric's stiffness and mass, or use the default projective-dynamics integrator",
+                crate::math::short(estimate)
+            );
+        }
         match self {
             Integrator::Leapfrog => format!(
                 "use dt <= {:.2e} s, or a larger spacing, or the default projective-dynamics integrator (stable at any step)",
@@ -100,7 +111,7 @@ impl Integrator {
             Integrator::ExplicitEuler => format!(
                 "use dt <= {:.2e} s, or the leapfrog integrator (stable up to {:.2e} s here), or more damping",
                 0.9 * estimate,
-                0.9 * Integrator::Leapfrog.stable_step(w, 0.0)
+                0.9 * leapfrog
             ),
             Integrator::ImplicitEuler => "raise newton_iterations or lower cg_tolerance, and report the scene: implicit Euler should not go unstable".into(),
             Integrator::ProjectiveDynamics => "raise iterations or turn chebyshev off, and report the scene: projective dynamics should not go unstable".into(),
@@ -368,4 +379,23 @@ pub fn speculate(input: &StepIn, contact: &mut [Option<Contact>]) {
             );
         }
     });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn advice_without_a_usable_estimate_names_the_fabric_not_a_zero_step() {
+        for i in [Integrator::Leapfrog, Integrator::ExplicitEuler] {
+            for (estimate, w) in [(0.0, f64::INFINITY), (f64::NAN, f64::NAN), (-1.0, 1.0)] {
+                let a = i.advice(estimate, w);
+                assert!(a.contains("no stable step can be estimated"), "{i}: {a}");
+                assert!(!a.contains("use dt <="), "{i}: {a}");
+            }
+        }
+        // A usable estimate gives a step: nine tenths of it.
+        let a = Integrator::Leapfrog.advice(1e-4, 2e4);
+        assert!(a.contains("use dt <= 9.00e-5 s"), "{a}");
+    }
 }
