@@ -80,7 +80,8 @@ pub struct Phases {
     /// Numeric factorisations (projective dynamics refactors when more than `low_rank_max`
     /// particles' contacts changed; implicit Euler's direct solver once per Newton step).
     pub factorisations: u64,
-    /// Columns solved for low-rank updates instead of refactoring (each a third of a solve).
+    /// Columns computed for low-rank updates instead of refactoring (each a path of the
+    /// elimination tree).
     pub low_rank_columns: u64,
     /// Conjugate-gradient iterations (implicit Euler).
     pub cg_iterations: u64,

@@ -275,8 +275,8 @@ pub struct SolveStats {
     pub factor_seconds: f64,
     /// Numeric factorisations.
     pub factorisations: u64,
-    /// Columns solved for low-rank corrections instead of refactoring (projective dynamics:
-    /// particles coming into or leaving contact), each a third of a solve.
+    /// Columns computed for low-rank corrections instead of refactoring (projective dynamics:
+    /// particles coming into or leaving contact), each a path of the elimination tree.
     pub low_rank_columns: u64,
     /// Conjugate-gradient iterations (implicit Euler).
     pub cg_iterations: u64,

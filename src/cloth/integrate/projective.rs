@@ -90,10 +90,11 @@ pub const CONTACT_STIFFEN: f64 = 10.0;
 pub const CONTACT_STIFFEN_MAX: f64 = 100.0;
 
 /// The most particles whose contact weight may differ from the factored matrix's before it is
-/// refactored; up to it, the solves are corrected exactly (`lowrank`). A refactorisation costs
-/// about as much as solving for 30 to 50 such particles (measured with `bench speed`, 64 and
-/// 128 per side).
-pub const LOW_RANK_MAX: u32 = 32;
+/// refactored; up to it, the solves are corrected exactly (`lowrank`). Measured with `bench
+/// speed` at 128 per side: 64, 128 and 192 took 0.82, 0.81 and 0.85 times the time of 32
+/// (56 refactorisations down to 46, 35 and 31); beyond, the `k x k` inverse of each change of
+/// the set costs more than the refactorisations it saves (1,000: 3 times slower).
+pub const LOW_RANK_MAX: u32 = 128;
 
 /// Local/global projective dynamics with a prefactored global matrix.
 pub struct ProjectiveDynamics {
@@ -332,8 +333,8 @@ impl ProjectiveDynamics {
             self.rhs.iter_mut().zip(&self.particle).for_each(row);
         }
         // x, y and z at once: one sweep of the factor serves the three columns.
-        chol.solve(&mut self.rhs);
-        self.update.correct(&mut self.rhs);
+        let update = &self.update;
+        chol.solve_with(&mut self.rhs, |y| update.correct(y));
         for (r, &i) in self.rhs.iter().zip(&self.particle) {
             self.p[i as usize] = Point3::from(*r);
         }
