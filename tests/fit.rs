@@ -458,12 +458,13 @@ fn forms_from_real_measurements_have_the_requested_girths() {
     let dir = tempfile::tempdir().unwrap();
     let mut cases = Vec::new();
     for body in ["mean_female", "mean_male", "mean_all"] {
-        let yaml = std::fs::read_to_string(data.join(format!("bodies/{body}.yaml"))).unwrap();
-        cases.push((body.to_string(), toml_from_yaml(&yaml)));
+        let path = data.join(format!("bodies/{body}.yaml"));
+        let yaml = std::fs::read_to_string(&path).unwrap();
+        cases.push((body.to_string(), toml_from_yaml(&yaml), path));
     }
     // FreeSewing's base set (mm). Its 'chest' is the bust girth, 'seat' the ISO hip girth, 'hips'
-    // the top hip 125 mm below the waist; no stature is given, so it is taken from the waist
-    // height (waistToFloor) and the model's waist proportion 0.631.
+    // the top hip 125 mm below the waist; no stature is given, so it is estimated as the neck
+    // base's height (waistToFloor + hpsToWaistBack) over the model's neck-base proportion 0.845.
     let fs: Value = serde_json::from_str(
         &std::fs::read_to_string(data.join("measurements/with_breasts_base_set_mm.json")).unwrap(),
     )
@@ -473,8 +474,8 @@ fn forms_from_real_measurements_have_the_requested_girths() {
     cases.push((
         "freesewing".into(),
         format!(
-            "units = \"mm\"\nstature = {}\nneck_base_girth = {}\nbust_girth = {}\nunderbust_girth = {}\nwaist_girth = {}\ntop_hip_girth = {}\nhip_girth = {}\nwaist_height = {waist_h}\ntop_hip_height = {}\nhip_height = {}\nunderbust_height = {}\n",
-            waist_h / 0.631,
+            "units = \"mm\"\nstature = {}\nneck_base_girth = {}\nbust_girth = {}\nunderbust_girth = {}\nwaist_girth = {}\ntop_hip_girth = {}\nhip_girth = {}\nwaist_height = {waist_h}\ntop_hip_height = {}\nhip_height = {}\nunderbust_height = {}\nbust_height = {}\nshoulder_width = {}\n",
+            (waist_h + g("hpsToWaistBack")) / 0.845,
             g("neck"),
             g("chest"),
             g("underbust"),
@@ -484,9 +485,12 @@ fn forms_from_real_measurements_have_the_requested_girths() {
             waist_h - g("waistToHips"),
             waist_h - g("waistToSeat"),
             waist_h + g("waistToUnderbust"),
+            waist_h + g("waistToUnderbust") + g("bustPointToUnderbust"),
+            g("shoulderToShoulder"),
         ),
+        data.join("measurements/with_breasts_base_set_mm.json"),
     ));
-    for (name, toml) in cases {
+    for (name, toml, direct) in cases {
         let src = dir.path().join(format!("{name}.toml"));
         std::fs::write(&src, toml).unwrap();
         let out = dir.path().join(format!("{name}.obj"));
@@ -498,6 +502,38 @@ fn forms_from_real_measurements_have_the_requested_girths() {
         ]);
         let girths = rep["girths"].as_array().unwrap();
         assert!(girths.len() >= 4, "{name}");
+        // The file read as it is (GarmentCode YAML, FreeSewing JSON) gives the same levels and
+        // girths as the hand translation above.
+        let (rep2, _) = fit_cli(&[
+            "--measurements",
+            direct.to_str().unwrap(),
+            "-o",
+            dir.path()
+                .join(format!("{name}_direct.obj"))
+                .to_str()
+                .unwrap(),
+        ]);
+        let key = |g: &Value| {
+            let f = |k: &str| g[k].as_f64().unwrap();
+            (
+                g["name"].as_str().unwrap().to_string(),
+                f("height"),
+                f("requested"),
+            )
+        };
+        let (a, b): (Vec<_>, Vec<_>) = (
+            girths.iter().map(key).collect(),
+            rep2["girths"].as_array().unwrap().iter().map(key).collect(),
+        );
+        assert_eq!(a.len(), b.len(), "{name}: {a:?} against {b:?}");
+        for (x, y) in a.iter().zip(&b) {
+            assert_eq!(x.0, y.0, "{name}");
+            let scale = if name == "freesewing" { 0.1 } else { 1.0 }; // mm against cm
+            assert!(
+                (x.1 * scale - y.1).abs() < 1e-9 && (x.2 * scale - y.2).abs() < 1e-9,
+                "{name}: {x:?} against {y:?}"
+            );
+        }
         for gc in girths {
             let (req, meas) = (
                 gc["requested"].as_f64().unwrap(),

@@ -119,6 +119,11 @@ pub struct FitCliReport {
     pub input: String,
     /// `sections`, `measurements` or `scan`.
     pub source: &'static str,
+    /// With `--measurements`: the set's format (`toml`, `freesewing` or `garmentcode`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub measurement_format: Option<&'static str>,
+    /// What reading the input assumed (an estimated stature, keys not used).
+    pub notes: Vec<String>,
     /// The output file.
     pub output: String,
     /// Units of the input (and of every length in this report but the output's).
@@ -139,6 +144,10 @@ pub struct FitCliReport {
 struct Source {
     path: PathBuf,
     kind: &'static str,
+    /// The measurement set's format (`toml`, `freesewing`, `garmentcode`).
+    format: Option<&'static str>,
+    /// What reading the measurements assumed (an estimated stature, keys not used).
+    notes: Vec<String>,
     sections: Vec<crate::fit::section::Section>,
     targets: Vec<GirthTarget>,
     units: Units,
@@ -159,6 +168,8 @@ fn load(args: &FitArgs) -> Result<Source, FitError> {
         return Ok(Source {
             path: p.clone(),
             kind: "sections",
+            format: None,
+            notes: Vec::new(),
             sections: f.sections,
             targets,
             units,
@@ -167,11 +178,14 @@ fn load(args: &FitArgs) -> Result<Source, FitError> {
         });
     }
     if let Some(p) = &args.measurements {
-        let m = measurements::read(p)?;
-        let (sections, targets, units) = measurements::sections(&m, p, args.levels.unwrap_or(41))?;
+        let imported = crate::fit::foreign::read_any(p)?;
+        let m = &imported.measurements;
+        let (sections, targets, units) = measurements::sections(m, p, args.levels.unwrap_or(41))?;
         return Ok(Source {
             path: p.clone(),
             kind: "measurements",
+            format: Some(imported.format),
+            notes: imported.notes,
             sections,
             targets,
             units,
@@ -200,6 +214,8 @@ fn load(args: &FitArgs) -> Result<Source, FitError> {
     Ok(Source {
         path: p.clone(),
         kind: "scan",
+        format: None,
+        notes: Vec::new(),
         sections,
         targets,
         units: args.units.unwrap_or(Units::M),
@@ -260,6 +276,8 @@ pub fn run(args: FitArgs) -> anyhow::Result<()> {
     let report = FitCliReport {
         input: src.path.display().to_string(),
         source: src.kind,
+        measurement_format: src.format,
+        notes: src.notes,
         output: args.output.display().to_string(),
         units: src.units,
         output_units: out_units,
@@ -342,6 +360,9 @@ fn print_summary(r: &FitCliReport, out: &Path) {
         f.girths.len(),
         r.wall_seconds
     );
+    for n in &r.notes {
+        println!("  note: {n}");
+    }
     for w in &f.warnings {
         println!("  warning: {w}");
     }

@@ -187,7 +187,12 @@ pub fn read(path: &Path) -> Result<Measurements, FitError> {
         path: path.to_path_buf(),
         source,
     })?;
-    toml::from_str(&text).map_err(|e| FitError::Toml {
+    read_str(&text, path)
+}
+
+/// Reads a measurements file's text (`path` names it in errors).
+pub fn read_str(text: &str, path: &Path) -> Result<Measurements, FitError> {
+    toml::from_str(text).map_err(|e| FitError::Toml {
         path: path.to_path_buf(),
         message: e.to_string().trim_end().to_string(),
     })

@@ -2,6 +2,7 @@
 
 pub mod error;
 pub mod fitter;
+pub mod foreign;
 pub mod input;
 pub mod lanczos;
 pub mod measurements;
