@@ -213,3 +213,61 @@ fn hostile_tetrahedra_at_1e100_and_1e_minus_100_convert() {
         assert_eq!(faces, 4, "{s}");
     }
 }
+
+/// Drapes the edited scene for two steps; returns stderr and the report's `warnings`.
+fn drape_warnings(edits: &[(&str, &str)]) -> (String, Vec<String>) {
+    let mut edits = edits.to_vec();
+    edits.push((
+        "until_rest = 1e-5            # J of kinetic energy\nmax_steps = 40000",
+        "steps = 2",
+    ));
+    let (dir, path) = scene(&edits);
+    let out = dir.path().join("out");
+    let o = run_within(
+        &[
+            "drape",
+            path.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--json",
+        ],
+        Duration::from_secs(60),
+    );
+    let (stdout, stderr) = text(&o);
+    assert_eq!(o.status.code(), Some(0), "{stderr}");
+    let report: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    let w = report["warnings"]
+        .as_array()
+        .expect("warnings in the report");
+    (
+        stderr,
+        w.iter().map(|v| v.as_str().unwrap().to_string()).collect(),
+    )
+}
+
+#[test]
+fn hostile_an_object_in_the_wrong_units_or_cloth_inside_it_is_warned_before_the_run() {
+    // The sphere read as if in centimetres: 100 times too large, the cloth inside it.
+    let (err, w) = drape_warnings(&[("friction = 0.3", "friction = 0.3\nscale = 100.0")]);
+    assert_eq!(w.len(), 2, "{w:?}");
+    // 104 m across against the cloth's 1.13 m.
+    assert!(w[0].starts_with("object 'sphere_r0.3' is 9"), "{w:?}");
+    assert!(w[0].contains("times the cloth's size"), "{w:?}");
+    assert!(w[0].contains("(set its scale)"), "{w:?}");
+    assert!(
+        w[1].contains("of 1681 particles start inside object 'sphere_r0.3'"),
+        "{w:?}"
+    );
+    for m in &w {
+        assert!(err.contains(&format!("warning: {m}")), "printed: {err}");
+    }
+    // The cloth placed through the sphere's centre: its middle starts inside.
+    let (_, w) = drape_warnings(&[("position = [0.0, 0.0, 0.33]", "position = [0.0, 0.0, 0.0]")]);
+    assert_eq!(w.len(), 1, "{w:?}");
+    let n: usize = w[0].split(' ').next().unwrap().parse().unwrap();
+    // The particles within the sphere's radius: about pi 0.3^2 / 0.02^2 = 707 of them.
+    assert!((600..800).contains(&n), "{w:?}");
+    // The scene as it is: nothing to warn about.
+    let (_, w) = drape_warnings(&[]);
+    assert!(w.is_empty(), "{w:?}");
+}

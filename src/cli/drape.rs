@@ -154,6 +154,9 @@ pub struct DrapeReport {
     pub objects: Vec<ObjectReport>,
     /// Per piece.
     pub pieces: Vec<PieceReport>,
+    /// What looked wrong before the run (an object far larger or smaller than the cloth,
+    /// cloth starting inside an object), also printed as warnings.
+    pub warnings: Vec<String>,
     /// Wall time of the whole command, s.
     pub command_seconds: f64,
 }
@@ -233,6 +236,8 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
     let mut sc = scene::read(&args.scene)?;
     let mut world = sim::load(&sc)?;
     sc.choose_step(world.stable_step)?;
+    let placement = sim::placement_warnings(&world);
+    super::warn(&placement);
     let out = &args.output;
     if out.is_file() {
         anyhow::bail!(
@@ -387,6 +392,7 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
         stable_step_estimate: world.stable_step,
         objects,
         pieces,
+        warnings: placement,
         command_seconds: start.elapsed().as_secs_f64(),
     };
     let out_path = args.output.clone();

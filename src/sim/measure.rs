@@ -45,6 +45,46 @@ pub fn particles_inside(world: &World) -> Vec<Option<usize>> {
         .collect()
 }
 
+/// How many times larger (or smaller) than the cloth an object may be across (box diagonals)
+/// before its placement is suspect. A body in centimetres in a metre scene is 100 times too
+/// large, which makes it 60 to 200 times a garment; real scenes stay below 20 (a 30 cm
+/// specimen on a 3 m floor: 10).
+pub const SCALE_WARN: f64 = 50.0;
+
+/// What looks wrong with a scene before it runs: an object [`SCALE_WARN`] times larger or
+/// smaller than the cloth across (units), and cloth that starts inside a closed object (no
+/// collision can push it out: it is behind the faces). A message per finding, for the user.
+pub fn placement_warnings(world: &World) -> Vec<String> {
+    let Some(cloth) = crate::math::Aabb::of_points(&world.state.x) else {
+        return Vec::new();
+    };
+    let across = cloth.diagonal();
+    let short = crate::math::short;
+    let mut out = Vec::new();
+    for c in &world.colliders {
+        let Some(b) = crate::math::Aabb::of_points(&c.mesh.positions) else {
+            continue;
+        };
+        let ratio = b.diagonal() / across;
+        if !(1.0 / SCALE_WARN..=SCALE_WARN).contains(&ratio) {
+            out.push(format!(
+                "object '{}' is {} times the cloth's size ({} m across against {} m): are both in the scene's units? An object in centimetres in a metre scene is 100 times too large (set its scale)",
+                c.name, short(ratio), short(b.diagonal()), short(across)
+            ));
+        }
+        if c.closed {
+            let n = world.state.x.par_iter().filter(|p| inside(c, p)).count();
+            if n > 0 {
+                out.push(format!(
+                    "{n} of {} particles start inside object '{}': no collision can push them out (they are behind its faces); move the piece or check the object's scale and placement",
+                    world.state.x.len(), c.name
+                ));
+            }
+        }
+    }
+    out
+}
+
 /// The smallest distance of a particle to each object.
 pub fn min_clearance(world: &World) -> Vec<f64> {
     world

@@ -22,7 +22,9 @@ pub mod seams;
 pub mod settings;
 pub mod watch;
 
-pub use measure::{drape_coefficient, inside, min_clearance, particles_inside, strain};
+pub use measure::{
+    drape_coefficient, inside, min_clearance, particles_inside, placement_warnings, strain,
+};
 pub use settings::{Cells, Stop};
 pub use watch::Instability;
 
