@@ -524,6 +524,34 @@ pub fn is_safe_file_name(name: &str) -> bool {
             .any(|c| matches!(c, '/' | '\\' | ':') || c.is_control()))
 }
 
+/// File names (before their extension) for `wanted`, in order, none equal to another or to one
+/// of `taken`: a name that is not safe ([`is_safe_file_name`]) becomes `fallback`, and a name
+/// already used gets `_2`, `_3`, ... appended. Names are compared ignoring case, as folders on
+/// macOS and Windows do.
+///
+/// ```
+/// use drapekit::io::unique_file_names;
+/// let wanted = ["sphere", "sphere", "square", "a/b"].map(String::from);
+/// let names = unique_file_names(&wanted, &["Square".to_string()], "object");
+/// assert_eq!(names, ["sphere", "sphere_2", "square_2", "object"]);
+/// ```
+pub fn unique_file_names(wanted: &[String], taken: &[String], fallback: &str) -> Vec<String> {
+    let mut used: std::collections::HashSet<String> =
+        taken.iter().map(|t| t.to_lowercase()).collect();
+    let mut out = Vec::with_capacity(wanted.len());
+    for w in wanted {
+        let base = if is_safe_file_name(w) { w } else { fallback };
+        let mut name = base.to_string();
+        let mut k = 2;
+        while !used.insert(name.to_lowercase()) {
+            name = format!("{base}_{k}");
+            k += 1;
+        }
+        out.push(name);
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

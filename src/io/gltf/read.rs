@@ -4,8 +4,10 @@
 //! carried through the node's world matrix (the product of the local matrices from the root
 //! down; a local matrix is `matrix`, or `T * R * S` from translation, rotation and scale). A
 //! world matrix of negative determinant mirrors, and its triangles are turned back (`a, c, b`)
-//! so that they keep their outward side, as the specification says. Every size the file gives
-//! is checked against the bytes that are there before anything is allocated.
+//! so that they keep their outward side, as the specification says; a mesh under a singular `W`
+//! (a node scaled to zero: hidden, as the frames of drapekit's animations are) is left out.
+//! Every size the file gives is checked against the bytes that are there before anything is
+//! allocated.
 
 use super::glb;
 use crate::io::error::{malformed, IoError, Location, ProblemKind};
@@ -327,6 +329,7 @@ impl<'a> Doc<'a> {
             }
         };
         let mut out = Vec::new();
+        let mut hidden = 0;
         let mut seen = vec![false; r.nodes.len()];
         let mut stack: Vec<(usize, Matrix4<f64>, String)> = roots
             .into_iter()
@@ -356,10 +359,17 @@ impl<'a> Doc<'a> {
                     let k = format!("{key}.mesh");
                     return Err(self.missing(k, "mesh", m.value(), r.meshes.len()));
                 }
-                out.push((m.value(), world, key.clone()));
+                if world.fixed_view::<3, 3>(0, 0).determinant() == 0.0 {
+                    hidden += 1;
+                } else {
+                    out.push((m.value(), world, key.clone()));
+                }
             }
             let kids = node.children.iter().flatten().rev();
             stack.extend(kids.map(|c| (c.value(), world, format!("{key}.children"))));
+        }
+        if hidden > 0 {
+            warnings.push(format!("{hidden} meshes placed by nodes scaled to zero (hidden, e.g. animation frames not shown) are left out"));
         }
         Ok(out)
     }
