@@ -37,14 +37,22 @@ fn sheet(n: u32, seed: u64) -> TriMesh {
     TriMesh::new(positions, faces)
 }
 
-/// Made-up vertex colours (the strain colours come from the render command).
+/// Made-up vertex colours (the strain colours come from the render command): channels in
+/// steps of 0.2, each a little above a whole number of 255ths as an f32.
 fn rainbow(n: usize) -> Vec<[f32; 4]> {
-    (0..n)
-        .map(|i| {
-            let t = i as f32 / n.max(1) as f32;
-            [t, 1.0 - t, 0.5, 1.0]
-        })
-        .collect()
+    let step = |k: usize| (k % 6) as f32 * 0.2;
+    (0..n).map(|i| [step(i), step(i + 2), 0.4, 1.0]).collect()
+}
+
+/// The colours as 0-255 RGBA, summed.
+fn color_sum(colors: &[[f32; 4]]) -> [u64; 4] {
+    let mut s = [0; 4];
+    for c in colors {
+        for k in 0..4 {
+            s[k] += (c[k] * 255.0).round() as u64;
+        }
+    }
+    s
 }
 
 #[test]
@@ -158,8 +166,14 @@ fn drape_writes_the_objects_as_placed_where_the_colliders_are() {
                 .unwrap()
                 .mesh;
             let cm: Vec<Point3> = collider.positions.iter().map(|p| p * 100.0).collect();
-            assert_eq!(placed.positions, cm, "{name}.{ext}");
-            assert_eq!(placed.faces, collider.faces, "{name}.{ext}");
+            assert!(
+                placed.positions == cm,
+                "{name}.{ext}: not the collider's vertices"
+            );
+            assert!(
+                placed.faces == collider.faces,
+                "{name}.{ext}: not the collider's faces"
+            );
         }
     }
     // And where the scene says: every vertex at the scaled radius about the translated centre
@@ -277,16 +291,23 @@ fn written_files_pass_the_khronos_validator_and_load_in_trimesh() {
         (obj_v + 3 * cloth_v, obj_f + 3 * cloth_f),
         (9 + 3 * (25 + 9), 8 + 3 * (32 + 8)),
     ];
-    for (t, (v, f)) in tools.trimesh(&paths).iter().zip(expected) {
-        assert_eq!(
-            (
-                t["vertices"].as_u64().unwrap(),
-                t["faces"].as_u64().unwrap()
-            ),
-            (v, f),
-            "{t}"
-        );
+    let loaded = tools.trimesh(&paths);
+    for (t, (v, f)) in loaded.iter().zip(expected) {
+        let counts = (t["vertices"].as_u64(), t["faces"].as_u64());
+        assert_eq!(counts, (Some(v), Some(f)), "{t}");
     }
+    // The colours arrive: 7 coloured meshes, the sum of their 0-255 colours as written.
+    let written = [rainbow(9), rainbow(25), rainbow(9)].map(|c| color_sum(&c));
+    let want: Vec<u64> = (0..4)
+        .map(|k| written[0][k] + 3 * (written[1][k] + written[2][k]))
+        .collect();
+    assert_eq!(loaded[4]["colored"], 7, "{}", loaded[4]);
+    assert_eq!(
+        loaded[4]["color_sum"],
+        serde_json::json!(want),
+        "{}",
+        loaded[4]
+    );
     // drapekit reads the animated file as a static viewer shows it: the objects and the end.
     let m = read_mesh(&moving.join("out/drop.glb"), &Default::default()).unwrap();
     assert_eq!(m.mesh.positions.len() as u64, obj_v + cloth_v);
