@@ -429,7 +429,8 @@ pub fn run(args: GarmentArgs) -> anyhow::Result<()> {
     change_up(&mut body_mesh, Up::Z, Up::Y);
     // The body is named after its file, unless the garment has that name.
     let body_name = stem(&args.body).unwrap_or_else(|| "body".into());
-    let body_name = io::unique_file_names(&[body_name], &[name.clone()], "body").remove(0);
+    let body_name =
+        io::unique_file_names(&[body_name], std::slice::from_ref(&name), "body").remove(0);
     let body_path = args.output.join(format!("{body_name}.obj"));
     io::write_mesh(
         &body_path,

@@ -251,20 +251,15 @@ pub enum IoError {
     #[error("cannot write {}: vertex {vertex} has a non-finite coordinate", path.display())]
     NonFinite { path: PathBuf, vertex: usize },
     /// A coordinate too large for 32-bit float (binary STL).
-    #[error("cannot write {} as {format}: vertex {vertex} has coordinate {value}, beyond 32-bit float range; write PLY, OBJ or --ascii STL", path.display())]
+    #[error("cannot write {}: vertex {vertex} has coordinate {value}, beyond 32-bit float range (binary STL and glTF store 32-bit floats); write PLY, OBJ or --ascii STL", path.display())]
     OutOfFloatRange {
         path: PathBuf,
-        format: &'static str,
         vertex: usize,
         value: f64,
     },
     /// Vertex colours that do not fit their mesh (glTF writer).
-    #[error("cannot write {}: the colours of '{part}' {reason}", path.display())]
-    BadColors {
-        path: PathBuf,
-        part: String,
-        reason: String,
-    },
+    #[error("cannot write {}: {reason}", path.display())]
+    BadColors { path: PathBuf, reason: String },
     /// Frames that cannot be an animation (glTF writer).
     #[error("cannot write {}: {reason}", path.display())]
     BadAnimation { path: PathBuf, reason: String },

@@ -377,7 +377,6 @@ pub fn stage_mesh(
                 .unwrap();
             IoError::OutOfFloatRange {
                 path,
-                format: "binary STL",
                 vertex: r.vertex,
                 value: r.value,
             }

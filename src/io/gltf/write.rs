@@ -167,11 +167,10 @@ fn check_part(path: &Path, part: &Part) -> Result<(), IoError> {
             let path = path.to_path_buf();
             return Err(IoError::NonFinite { path, vertex: v });
         }
-        if let Some(&value) = p.iter().find(|c| !(c.abs() <= f64::from(f32::MAX))) {
-            let (path, format) = (path.to_path_buf(), "glTF");
+        if let Some(&value) = p.iter().find(|c| c.abs() > f64::from(f32::MAX)) {
+            let path = path.to_path_buf();
             return Err(IoError::OutOfFloatRange {
                 path,
-                format,
                 vertex: v,
                 value,
             });
@@ -180,10 +179,9 @@ fn check_part(path: &Path, part: &Part) -> Result<(), IoError> {
     let Some(colors) = &part.colors else {
         return Ok(());
     };
-    let bad = |reason: String| IoError::BadColors {
+    let bad = |what: String| IoError::BadColors {
         path: path.to_path_buf(),
-        part: part.name.clone(),
-        reason,
+        reason: format!("the colours of '{}' {what}", part.name),
     };
     if colors.len() != part.mesh.positions.len() {
         let (c, v) = (colors.len(), part.mesh.positions.len());
