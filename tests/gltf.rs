@@ -386,7 +386,7 @@ fn malformed_gltf_files_get_errors_naming_the_file_and_the_key() {
         (
             "cut.glb",
             bytes[..bytes.len() - 7].to_vec(),
-            "cut.glb: byte 8 (length): truncated binary glTF: the header's length of",
+            "cut.glb: byte 8 (length): truncated binary glTF: the file, by the header's length field, needs",
         ),
         (
             "magic.glb",

@@ -50,7 +50,7 @@ pub fn split<'a>(path: &Path, bytes: &'a [u8]) -> Result<Chunks<'a>, IoError> {
     }
     let declared = u64::from(u32_at(bytes, 8));
     if declared != size {
-        let what = format!("the header's length of {declared}");
+        let what = "the file, by the header's length field,".to_string();
         return Err(err(8, "length", truncated(what, declared, size)));
     }
     let mut chunks = Vec::new();
@@ -148,7 +148,7 @@ mod tests {
         let e = split(Path::new("x.glb"), &g[..g.len() - 5]).unwrap_err();
         let s = e.to_string();
         assert!(
-            s.contains("byte 8 (length): truncated binary glTF: the header's length of 48 needs 48 bytes, the file has 43"),
+            s.contains("byte 8 (length): truncated binary glTF: the file, by the header's length field, needs 48 bytes, the file has 43"),
             "{s}"
         );
     }
