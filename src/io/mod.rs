@@ -595,6 +595,10 @@ mod tests {
             Some(Format::Stl)
         );
         assert_eq!(Format::sniff(b"hello world\n"), None);
+        assert_eq!(Format::sniff(b"glTF\x02\0\0\0"), Some(Format::Glb));
+        let json = b"\xEF\xBB\xBF {\n  \"asset\": {\"version\": \"2.0\"}}";
+        assert_eq!(Format::sniff(json), Some(Format::Gltf));
+        assert_eq!(Format::sniff(b"{\"units\": \"m\"}"), None);
     }
 
     #[test]
