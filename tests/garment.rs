@@ -251,6 +251,7 @@ fn the_garment_command_reports_a_tube_on_a_cylinder() {
         "--settle-max",
         "0.1",
         "--panels",
+        "--glb",
         "--json",
     ]);
     let (stdout, stderr) = common::text(&o);
@@ -286,7 +287,7 @@ fn the_garment_command_reports_a_tube_on_a_cylinder() {
     // each panel alone: together they hold every particle and triangle once.
     assert_eq!(
         common::listing(&out),
-        vec!["column.obj", "panels", "tube.obj"]
+        vec!["column.obj", "panels", "tube.glb", "tube.obj"]
     );
     let garment = std::fs::read_to_string(out.join("tube.obj")).unwrap();
     assert!(garment.contains("g front") && garment.contains("g back"));
@@ -304,6 +305,37 @@ fn the_garment_command_reports_a_tube_on_a_cylinder() {
     }
     assert_eq!(v, count(&garment, "v "));
     assert_eq!(f, count(&garment, "f "));
+    // `--glb`: the body first, then each panel in the garment's order: the OBJ files' vertices,
+    // to f32 precision.
+    let glb = drapekit::io::read_mesh(&out.join("tube.glb"), &Default::default())
+        .unwrap()
+        .mesh;
+    let mut want = drapekit::io::read_mesh(&out.join("column.obj"), &Default::default())
+        .unwrap()
+        .mesh
+        .positions;
+    for p in panels {
+        let p = p["name"].as_str().unwrap();
+        let panel = out.join("panels").join(format!("{p}.obj"));
+        let m = drapekit::io::read_mesh(&panel, &Default::default()).unwrap();
+        want.extend(m.mesh.positions);
+    }
+    assert_eq!(glb.positions.len(), want.len());
+    let worst = glb
+        .positions
+        .iter()
+        .zip(&want)
+        .map(|(a, b)| (a - b).amax())
+        .fold(0.0, f64::max);
+    assert!(worst < 1e-7, "{worst}");
+    if let Some(tools) = common::tools() {
+        let r = &tools.validate(&[&out.join("tube.glb")])[0];
+        assert_eq!(
+            (&r["errors"], &r["warnings"]),
+            (&0.into(), &0.into()),
+            "{r}"
+        );
+    }
 }
 
 /// Runs `garment` on `pattern` (the text of a specification) with a body that does not exist

@@ -1,7 +1,8 @@
 //! `drapekit drape SCENE.toml -o OUT_DIR`: a validation drape.
 
+use crate::io::gltf::{self, Frame, Part, Surface};
 use crate::io::{self, WriteOptions};
-use crate::mesh::transform::Units;
+use crate::mesh::transform::{change_up, Units, Up};
 use crate::mesh::TriMesh;
 use crate::scene;
 use crate::sim::{self, World};
@@ -14,9 +15,14 @@ use std::path::{Path, PathBuf};
 pub struct DrapeArgs {
     /// The scene file (TOML; see the README).
     pub scene: PathBuf,
-    /// The output directory (created if needed): one OBJ per piece, frames/ on request.
+    /// The output directory (created if needed): one OBJ per piece and per object as placed,
+    /// frames/ on request.
     #[arg(short, long, value_name = "OUT_DIR")]
     pub output: PathBuf,
+    /// Also write OUT_DIR/<scene>.glb: the pieces and the objects as placed (metres, y up, as
+    /// glTF wants), the frames as an animation when the scene writes frames.
+    #[arg(long)]
+    pub glb: bool,
     /// Write the JSON report here.
     #[arg(long, value_name = "R.json")]
     pub report: Option<PathBuf>,
@@ -42,6 +48,8 @@ pub struct ObjectReport {
     pub particles_inside: Option<usize>,
     /// Smallest particle distance to it at the end (length units).
     pub min_clearance: f64,
+    /// The object as placed in the scene (scene units and frame), in the pieces' formats.
+    pub files: Vec<String>,
 }
 
 /// One piece in the report.
@@ -157,6 +165,8 @@ pub struct DrapeReport {
     /// What looked wrong before the run (an object far larger or smaller than the cloth,
     /// cloth starting inside an object), also printed as warnings.
     pub warnings: Vec<String>,
+    /// The glTF file (`--glb`).
+    pub glb: Option<String>,
     /// Wall time of the whole command, s.
     pub command_seconds: f64,
 }
@@ -230,6 +240,119 @@ fn piece_mesh(world: &World, piece: usize, to_units: f64) -> TriMesh {
     TriMesh::new(positions, faces)
 }
 
+/// The file names of the objects as placed: each object's file stem, made unique against the
+/// pieces, the other objects, and the inputs that sit in the output folder.
+fn object_names(sc: &scene::Scene, out: &Path) -> Vec<String> {
+    let stem = |p: &Path| p.file_stem().map(|s| s.to_string_lossy().into_owned());
+    let wanted: Vec<String> = sc
+        .objects
+        .iter()
+        .map(|o| stem(&o.mesh).unwrap_or_else(|| o.name.clone()))
+        .collect();
+    let mut taken: Vec<String> = sc.pieces.iter().map(|p| p.name.clone()).collect();
+    let inputs = std::iter::once(&sc.path).chain(sc.objects.iter().map(|o| &o.mesh));
+    let beside = inputs.filter(|i| i.parent().is_some_and(|d| io::same_file(d, out)));
+    taken.extend(beside.filter_map(|i| stem(i)));
+    io::unique_file_names(&wanted, &taken, "object")
+}
+
+/// The object as placed: the collider's mesh (prepared, turned to z up, scaled, translated) in
+/// the scene's units.
+fn object_mesh(world: &World, i: usize, to_units: f64) -> TriMesh {
+    let mut mesh = world.colliders[i].mesh.clone();
+    crate::mesh::transform::scale(&mut mesh, to_units);
+    mesh
+}
+
+/// Stages each object as placed (`OUT/<name>.obj`, and `.ply` when the pieces get one);
+/// returns each object's files.
+fn stage_objects(
+    sc: &scene::Scene,
+    world: &World,
+    names: &[String],
+    out: &Path,
+    inputs: &[&Path],
+    staged: &mut Vec<io::Staged>,
+) -> anyhow::Result<Vec<Vec<String>>> {
+    let to_units = Units::factor(Units::M, sc.units);
+    let exts: &[&str] = if sc.ply { &["obj", "ply"] } else { &["obj"] };
+    let mut files = Vec::new();
+    for (i, name) in names.iter().enumerate() {
+        let mesh = object_mesh(world, i, to_units);
+        let mut mine = Vec::new();
+        for ext in exts {
+            let path = out.join(format!("{name}.{ext}"));
+            let (f, _) = io::stage_mesh(&path, &mesh, &WriteOptions::default(), inputs)?;
+            staged.push(f);
+            mine.push(path.display().to_string());
+        }
+        files.push(mine);
+    }
+    Ok(files)
+}
+
+/// Metres, z up (the simulation's frame) to glTF's metres, y up.
+fn to_gltf(mut mesh: TriMesh) -> TriMesh {
+    change_up(&mut mesh, Up::Z, Up::Y);
+    mesh
+}
+
+/// The pieces at one moment, in metres and z up.
+fn piece_meshes(world: &World) -> Vec<TriMesh> {
+    (0..world.model.pieces.len())
+        .map(|i| piece_mesh(world, i, 1.0))
+        .collect()
+}
+
+/// The glTF scene of a drape: the objects as placed, and the pieces (at the end, or as frames
+/// at `step * dt` s with the end last).
+fn gltf_scene(
+    sc: &scene::Scene,
+    world: &World,
+    names: &[String],
+    frames: Vec<(u64, Vec<TriMesh>)>,
+    steps: u64,
+) -> gltf::Scene {
+    let objects = (0..world.colliders.len()).map(|i| {
+        Part::new(
+            &names[i],
+            to_gltf(object_mesh(world, i, 1.0)),
+            Surface::Solid,
+        )
+    });
+    let pieces = |meshes: Vec<TriMesh>| -> Vec<Part> {
+        let named = sc.pieces.iter().zip(meshes);
+        named
+            .map(|(p, m)| Part::new(&p.name, to_gltf(m), Surface::Cloth))
+            .collect()
+    };
+    let mut scene = gltf::Scene {
+        parts: objects.collect(),
+        frames: Vec::new(),
+    };
+    if frames.is_empty() {
+        scene.parts.extend(pieces(piece_meshes(world)));
+        return scene;
+    }
+    let dt = sc.solver.dt;
+    let last = frames.last().map(|f| f.0);
+    for (step, meshes) in frames {
+        let time = step as f64 * dt;
+        scene.frames.push(Frame {
+            time,
+            parts: pieces(meshes),
+        });
+    }
+    if last != Some(steps) {
+        let time = steps as f64 * dt;
+        scene.frames.push(Frame {
+            time,
+            parts: pieces(piece_meshes(world)),
+        });
+    }
+    scene
+}
+
 /// Runs `drapekit drape`.
 pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
     let start = std::time::Instant::now();
@@ -270,7 +393,12 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
     });
     let frames_dir = out.join("frames");
     let names: Vec<String> = sc.pieces.iter().map(|p| p.name.clone()).collect();
+    // The frames kept for the glTF file, in metres and z up.
+    let glb_frames = std::cell::RefCell::new(Vec::<(u64, Vec<TriMesh>)>::new());
     let mut frame = |step: u64, w: &World| -> Result<bool, sim::SimError> {
+        if args.glb {
+            glb_frames.borrow_mut().push((step, piece_meshes(w)));
+        }
         std::fs::create_dir_all(&frames_dir).map_err(|e| sim::SimError::Frame {
             step,
             message: e.to_string(),
@@ -310,12 +438,27 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
             return Err(e.into());
         }
     };
-    let pieces = match stage_pieces(&sc, &world, out, &inputs, &mut staged).and_then(|p| {
-        io::commit(std::mem::take(&mut staged))
-            .map(|()| p)
-            .map_err(Into::into)
-    }) {
-        Ok(p) => p,
+    let object_names = object_names(&sc, out);
+    let glb_path = args.glb.then(|| {
+        let stem = sc
+            .path
+            .file_stem()
+            .map_or("scene".into(), |s| s.to_string_lossy());
+        out.join(format!("{stem}.glb"))
+    });
+    let written = (|| -> anyhow::Result<(Vec<PieceReport>, Vec<Vec<String>>)> {
+        let pieces = stage_pieces(&sc, &world, out, &inputs, &mut staged)?;
+        let objects = stage_objects(&sc, &world, &object_names, out, &inputs, &mut staged)?;
+        if let Some(path) = &glb_path {
+            let frames = glb_frames.take();
+            let scene = gltf_scene(&sc, &world, &object_names, frames, stats.steps);
+            staged.push(gltf::stage_scene(path, &scene, &inputs)?);
+        }
+        io::commit(std::mem::take(&mut staged))?;
+        Ok((pieces, objects))
+    })();
+    let (pieces, mut object_files) = match written {
+        Ok(w) => w,
         Err(e) => {
             abandon(staged, out, existed);
             return Err(e);
@@ -335,6 +478,7 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
             closed: c.closed,
             particles_inside: inside[i],
             min_clearance: clearance[i] * to_units,
+            files: std::mem::take(&mut object_files[i]),
         })
         .collect();
     let (max_strain, mean_strain) = sim::strain(&world.model, &world.state.x);
@@ -393,6 +537,7 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
         objects,
         pieces,
         warnings: placement,
+        glb: glb_path.map(|p| p.display().to_string()),
         command_seconds: start.elapsed().as_secs_f64(),
     };
     let out_path = args.output.clone();

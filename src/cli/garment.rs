@@ -67,6 +67,9 @@ pub struct GarmentArgs {
     /// Also write each panel alone, as `OUT_DIR/panels/<panel>.obj`.
     #[arg(long)]
     pub panels: bool,
+    /// Also write OUT_DIR/<garment>.glb: each panel and the body as placed (metres, y up).
+    #[arg(long)]
+    pub glb: bool,
 }
 
 /// The report of `drapekit garment`.
@@ -250,16 +253,9 @@ fn check_panel_names(pattern: &crate::garment::spec::Pattern, path: &Path) -> an
     Ok(())
 }
 
-/// Writes each panel alone into `dir` (`<panel>.obj`, its vertices renumbered). Returns the
-/// files written.
-fn write_panels(
-    dir: &Path,
-    mesh: &TriMesh,
-    groups: &[(String, usize, usize)],
-    inputs: &[&Path],
-) -> anyhow::Result<Vec<String>> {
-    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    let mut files = Vec::new();
+/// Each panel alone (its vertices renumbered), with its name.
+fn panel_meshes(mesh: &TriMesh, groups: &[(String, usize, usize)]) -> Vec<(String, TriMesh)> {
+    let mut panels = Vec::new();
     for (name, first, count) in groups {
         let mut index = vec![u32::MAX; mesh.positions.len()];
         let mut positions = Vec::new();
@@ -273,12 +269,46 @@ fn write_panels(
                 index[v as usize]
             }));
         }
+        panels.push((name.clone(), TriMesh::new(positions, faces)));
+    }
+    panels
+}
+
+/// Writes each panel alone into `dir` (`<panel>.obj`). Returns the files written.
+fn write_panels(
+    dir: &Path,
+    mesh: &TriMesh,
+    groups: &[(String, usize, usize)],
+    inputs: &[&Path],
+) -> anyhow::Result<Vec<String>> {
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    let mut files = Vec::new();
+    for (name, panel) in panel_meshes(mesh, groups) {
         let path = dir.join(format!("{name}.obj"));
-        let panel = TriMesh::new(positions, faces);
         io::write_mesh(&path, &panel, &io::WriteOptions::default(), inputs)?;
         files.push(path.display().to_string());
     }
     Ok(files)
+}
+
+/// Writes the glTF file: each panel as cloth and the body as placed, as the OBJ files have them.
+fn write_glb(
+    path: &Path,
+    mesh: &TriMesh,
+    groups: &[(String, usize, usize)],
+    body: (&str, &TriMesh),
+    inputs: &[&Path],
+) -> anyhow::Result<()> {
+    use crate::io::gltf::{Part, Scene, Surface};
+    let mut parts = vec![Part::new(body.0, body.1.clone(), Surface::Solid)];
+    let panels = panel_meshes(mesh, groups).into_iter();
+    parts.extend(panels.map(|(name, m)| Part::new(name, m, Surface::Cloth)));
+    let scene = Scene {
+        parts,
+        frames: Vec::new(),
+    };
+    crate::io::gltf::write_scene(path, &scene, inputs)?;
+    Ok(())
 }
 
 /// Writes an OBJ with a group per panel.
@@ -397,16 +427,22 @@ pub fn run(args: GarmentArgs) -> anyhow::Result<()> {
     }
     let mut body_mesh = c.mesh.clone();
     change_up(&mut body_mesh, Up::Z, Up::Y);
-    let body_path = args.output.join(format!(
-        "{}.obj",
-        stem(&args.body).unwrap_or_else(|| "body".into())
-    ));
+    // The body is named after its file, unless the garment has that name.
+    let body_name = stem(&args.body).unwrap_or_else(|| "body".into());
+    let body_name =
+        io::unique_file_names(&[body_name], std::slice::from_ref(&name), "body").remove(0);
+    let body_path = args.output.join(format!("{body_name}.obj"));
     io::write_mesh(
         &body_path,
         &body_mesh,
         &io::WriteOptions::default(),
         &inputs,
     )?;
+    if args.glb {
+        let path = args.output.join(format!("{name}.glb"));
+        write_glb(&path, &mesh, &groups, (&body_name, &body_mesh), &inputs)?;
+        files.push(path.display().to_string());
+    }
     let mut assumed = vec![body_note];
     assumed.push(format!(
         "the pattern is in units of 1/{} m (its units_in_meter)",

@@ -123,8 +123,17 @@ pub fn main() -> ExitCode {
 /// The warning for `--ascii` with an output format that is text whatever the flag says (OBJ,
 /// vertex triples); `None` when the flag chooses something (STL, PLY) or was not given.
 pub fn ascii_warning(ascii: bool, format: Format) -> Option<String> {
-    (ascii && matches!(format, Format::Obj | Format::Triples))
-        .then(|| format!("--ascii does nothing for {format} output ({format} is always text): it applies to STL and PLY"))
+    let what = match format {
+        Format::Obj | Format::Triples => "is always text",
+        Format::Glb => "is always binary",
+        Format::Gltf => "is always JSON",
+        Format::Stl | Format::Ply => return None,
+    };
+    ascii.then(|| {
+        format!(
+            "--ascii does nothing for {format} output ({format} {what}): it applies to STL and PLY"
+        )
+    })
 }
 
 /// Prints each warning on stderr.

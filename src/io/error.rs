@@ -10,6 +10,8 @@ pub enum Location {
     Line(u64),
     /// A byte offset of a binary file, and the record (e.g. `triangle 3`) there.
     Byte { offset: u64, record: String },
+    /// A place in a glTF file's JSON, e.g. `meshes[0].primitives[1].indices`, with what is there.
+    Key(String),
     /// The whole file.
     File,
 }
@@ -20,6 +22,7 @@ impl fmt::Display for Location {
             Location::Line(n) => write!(f, "line {n}"),
             Location::Byte { offset, record } if record.is_empty() => write!(f, "byte {offset}"),
             Location::Byte { offset, record } => write!(f, "byte {offset} ({record})"),
+            Location::Key(k) => f.write_str(k),
             Location::File => Ok(()),
         }
     }
@@ -149,6 +152,55 @@ pub enum ProblemKind {
     /// Text that is not valid in its declared encoding.
     #[error("{reason}")]
     Encoding { reason: String },
+    /// A binary glTF without the `glTF` magic.
+    #[error("not a binary glTF: the file starts with {found}, expected the magic 'glTF'")]
+    GlbMagic { found: String },
+    /// A binary glTF of another version.
+    #[error("binary glTF version {version}: drapekit reads version 2")]
+    GlbVersion { version: u32 },
+    /// A binary glTF cut short, or whose header disagrees with its size.
+    #[error("truncated binary glTF: {what} needs {needed} bytes, the file has {size}")]
+    GlbTruncated {
+        what: String,
+        needed: u64,
+        size: u64,
+    },
+    /// A binary glTF whose chunks are not JSON then (optionally) BIN.
+    #[error("{reason}")]
+    GlbChunk { reason: String },
+    /// JSON that is not a glTF document.
+    #[error("the glTF JSON cannot be read: {message}")]
+    GltfJson { message: String },
+    /// An index into one of the file's arrays that is out of range.
+    #[error("{what} {index} does not exist: the file has {count}")]
+    GltfMissing {
+        what: String,
+        index: u64,
+        count: u64,
+    },
+    /// Data that reaches past the end of its buffer or buffer view.
+    #[error("{what} needs {needed} bytes, but {within} holds {available}")]
+    GltfShort {
+        what: String,
+        needed: u64,
+        within: String,
+        available: u64,
+    },
+    /// A buffer's external file that cannot be read.
+    #[error("buffer file '{file}' cannot be read: {reason}")]
+    GltfBufferFile { file: String, reason: String },
+    /// A primitive that is not triangles.
+    #[error("primitive mode {mode}: drapekit reads triangles (mode 4, TRIANGLES) only")]
+    GltfMode { mode: String },
+    /// A triangle list whose length is not a multiple of three.
+    #[error("{count} vertices do not make whole triangles: a triangle list has a multiple of 3")]
+    GltfTriangleCount { count: u64 },
+    /// Something valid glTF that drapekit does not read.
+    #[error("{what} is not supported by drapekit's glTF reader")]
+    GltfUnsupported { what: String },
+    /// Instancing that would make the mesh larger than drapekit reads.
+    #[error("the scene places {vertices} vertices (meshes used by several nodes are copied), more than the {limit} drapekit reads")]
+    GltfTooLarge { vertices: u64, limit: u64 },
 }
 
 /// One problem and where it is.
@@ -173,7 +225,7 @@ pub enum IoError {
     #[error("{}: the file is empty (0 bytes): expected a mesh", path.display())]
     Empty { path: PathBuf },
     /// Neither the extension nor the content tells the format.
-    #[error("{}: cannot tell the mesh format: {reason}; give --from triples|obj|stl|ply", path.display())]
+    #[error("{}: cannot tell the mesh format: {reason}; give --from triples|obj|stl|ply|gltf", path.display())]
     UnknownFormat { path: PathBuf, reason: String },
     /// The content is malformed; every problem found is listed.
     #[error("{}", list_problems(path, format, problems, *more))]
@@ -199,14 +251,20 @@ pub enum IoError {
     #[error("cannot write {}: vertex {vertex} has a non-finite coordinate", path.display())]
     NonFinite { path: PathBuf, vertex: usize },
     /// A coordinate too large for 32-bit float (binary STL).
-    #[error("cannot write {} as binary STL: vertex {vertex} has coordinate {value}, beyond 32-bit float range; write PLY, OBJ or --ascii STL", path.display())]
+    #[error("cannot write {}: vertex {vertex} has coordinate {value}, beyond 32-bit float range (binary STL and glTF store 32-bit floats); write PLY, OBJ or --ascii STL", path.display())]
     OutOfFloatRange {
         path: PathBuf,
         vertex: usize,
         value: f64,
     },
+    /// Vertex colours that do not fit their mesh (glTF writer).
+    #[error("cannot write {}: {reason}", path.display())]
+    BadColors { path: PathBuf, reason: String },
+    /// Frames that cannot be an animation (glTF writer).
+    #[error("cannot write {}: {reason}", path.display())]
+    BadAnimation { path: PathBuf, reason: String },
     /// The output format is not known.
-    #[error("cannot write {}: unknown output format for extension '{ext}'; give --to triples|obj|stl|ply", path.display())]
+    #[error("cannot write {}: unknown output format for extension '{ext}'; give --to triples|obj|stl|ply|glb|gltf", path.display())]
     UnknownOutputFormat { path: PathBuf, ext: String },
 }
 

@@ -1,4 +1,4 @@
-//! Reading and writing meshes: vertex triples, OBJ, STL and PLY.
+//! Reading and writing meshes: vertex triples, OBJ, STL, PLY and glTF 2.0 (`.gltf`, `.glb`).
 //!
 //! [`read_mesh`] picks the format from `--from`, else the extension, else the content, and
 //! returns an indexed [`TriMesh`] plus a [`ReadInfo`] of what the file held. Readers reject
@@ -11,9 +11,10 @@
 //!
 //! The readers are drapekit's own: tobj 4.0.5, stl_io 0.10 and ply-rs fail or misread files
 //! in `shared/realdata/meshes` (see `READER_PROBE.tsv` there and the README), and their errors
-//! carry no line numbers.
+//! carry no line numbers. glTF's JSON is parsed by the `gltf-json` crate ([`gltf`]).
 
 pub mod error;
+pub mod gltf;
 pub mod obj;
 pub mod ply;
 pub mod stl;
@@ -42,6 +43,10 @@ pub enum Format {
     Stl,
     /// PLY, ASCII or binary.
     Ply,
+    /// glTF 2.0 as JSON (`.gltf`; written with the buffer in a `data:` URI).
+    Gltf,
+    /// glTF 2.0 binary (`.glb`).
+    Glb,
 }
 
 impl FromStr for Format {
@@ -52,8 +57,10 @@ impl FromStr for Format {
             "obj" => Ok(Format::Obj),
             "stl" => Ok(Format::Stl),
             "ply" => Ok(Format::Ply),
+            "gltf" => Ok(Format::Gltf),
+            "glb" => Ok(Format::Glb),
             _ => Err(format!(
-                "unknown format '{s}': expected triples, obj, stl or ply"
+                "unknown format '{s}': expected triples, obj, stl, ply, gltf or glb"
             )),
         }
     }
@@ -66,12 +73,15 @@ impl fmt::Display for Format {
             Format::Obj => "obj",
             Format::Stl => "stl",
             Format::Ply => "ply",
+            Format::Gltf => "gltf",
+            Format::Glb => "glb",
         })
     }
 }
 
 impl Format {
-    /// The format an extension names (`.txt`, `.tri`, `.lsp.txt`, `.obj`, `.stl`, `.ply`, any case).
+    /// The format an extension names (`.txt`, `.tri`, `.lsp.txt`, `.obj`, `.stl`, `.ply`,
+    /// `.gltf`, `.glb`, any case).
     pub fn from_path(path: &Path) -> Option<Format> {
         let ext = path.extension()?.to_str()?.to_ascii_lowercase();
         match ext.as_str() {
@@ -79,8 +89,15 @@ impl Format {
             "obj" => Some(Format::Obj),
             "stl" => Some(Format::Stl),
             "ply" => Some(Format::Ply),
+            "gltf" => Some(Format::Gltf),
+            "glb" => Some(Format::Glb),
             _ => None,
         }
+    }
+
+    /// Whether the format is glTF, JSON or binary (one reader for both).
+    pub fn is_gltf(self) -> bool {
+        matches!(self, Format::Gltf | Format::Glb)
     }
 
     /// The format the content shows, if it is unmistakable.
@@ -92,6 +109,15 @@ impl Format {
     pub fn sniff_head(bytes: &[u8], len: u64) -> Option<Format> {
         if bytes.starts_with(b"ply\n") || bytes.starts_with(b"ply\r\n") {
             return Some(Format::Ply);
+        }
+        if bytes.starts_with(gltf::glb::MAGIC) {
+            return Some(Format::Glb);
+        }
+        let json = bytes.strip_prefix(&[0xEF, 0xBB, 0xBF]).unwrap_or(bytes);
+        if json.trim_ascii_start().starts_with(b"{")
+            && json.windows(7).take(1 << 16).any(|w| w == b"\"asset\"")
+        {
+            return Some(Format::Gltf);
         }
         if stl::is_binary_len(bytes, len) {
             return Some(Format::Stl);
@@ -137,7 +163,7 @@ pub struct ReadOptions {
 /// What a file held, as read.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct ReadInfo {
-    /// `triples`, `obj`, `stl-ascii`, `stl-binary`, `ply-ascii`, `ply-binary-le`, `ply-binary-be`.
+    /// `triples`, `obj`, `stl-ascii`, `stl-binary`, `ply-ascii`, `ply-binary-le`, `ply-binary-be`, `gltf`, `glb`.
     pub format: String,
     /// Vertex-triples layout found.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -221,6 +247,7 @@ pub fn read_bytes(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<ReadO
         Format::Obj => obj::read(path, bytes, opts),
         Format::Stl => stl::read(path, bytes, opts),
         Format::Ply => ply::read(path, bytes, opts),
+        Format::Gltf | Format::Glb => gltf::read(path, bytes),
     }?;
     if let Some(n) = note {
         out.info.warnings.insert(0, n);
@@ -237,19 +264,25 @@ fn choose_format(
 ) -> Result<(Format, Option<String>), IoError> {
     Ok(match (opts.format, Format::from_path(path), sniffed) {
         (Some(f), _, _) => (f, None),
-        // Content that is unmistakably PLY or STL wins over a misleading extension.
-        (None, Some(ext), Some(s)) if ext != s && matches!(s, Format::Ply | Format::Stl) => (
+        // Content that is unmistakably PLY, STL or glTF wins over a misleading extension.
+        (None, Some(ext), Some(s))
+            if ext != s
+                && !(ext.is_gltf() && s.is_gltf())
+                && matches!(s, Format::Ply | Format::Stl | Format::Gltf | Format::Glb) =>
+        {
+            (
             s,
             Some(format!(
                 "the extension says {ext} but the content is {s}: read as {s}"
             )),
-        ),
+        )
+        }
         (None, Some(ext), _) => (ext, None),
         (None, None, Some(s)) => (s, None),
         (None, None, None) => {
             return Err(IoError::UnknownFormat {
                 path: path.to_path_buf(),
-                reason: "the extension is not .txt/.tri/.obj/.stl/.ply and the content is none of vertex triples, OBJ, STL or PLY".into(),
+                reason: "the extension is not .txt/.tri/.obj/.stl/.ply/.gltf/.glb and the content is none of vertex triples, OBJ, STL, PLY or glTF".into(),
             })
         }
     })
@@ -318,12 +351,20 @@ pub fn stage_mesh(
             vertex: v,
         });
     }
+    if format.is_gltf() {
+        let name = path
+            .file_stem()
+            .map_or("mesh".into(), |s| s.to_string_lossy());
+        let staged = gltf::stage_scene(path, &gltf::single(&name, mesh), inputs)?;
+        return Ok((staged, format));
+    }
     let staged = stage(path, inputs, |w| match format {
         Format::Triples => triples::write(w, mesh),
         Format::Obj => obj::write(w, mesh),
         Format::Stl if opts.ascii => stl::write_ascii(w, mesh),
         Format::Stl => stl::write_binary(w, mesh),
         Format::Ply => ply::write(w, mesh, opts.ascii),
+        Format::Gltf | Format::Glb => unreachable!("written above"),
     })
     .map_err(|e| match e {
         IoError::Write { path, source }
@@ -482,6 +523,34 @@ pub fn is_safe_file_name(name: &str) -> bool {
             .any(|c| matches!(c, '/' | '\\' | ':') || c.is_control()))
 }
 
+/// File names (before their extension) for `wanted`, in order, none equal to another or to one
+/// of `taken`: a name that is not safe ([`is_safe_file_name`]) becomes `fallback`, and a name
+/// already used gets `_2`, `_3`, ... appended. Names are compared ignoring case, as folders on
+/// macOS and Windows do.
+///
+/// ```
+/// use drapekit::io::unique_file_names;
+/// let wanted = ["sphere", "sphere", "square", "a/b"].map(String::from);
+/// let names = unique_file_names(&wanted, &["Square".to_string()], "object");
+/// assert_eq!(names, ["sphere", "sphere_2", "square_2", "object"]);
+/// ```
+pub fn unique_file_names(wanted: &[String], taken: &[String], fallback: &str) -> Vec<String> {
+    let mut used: std::collections::HashSet<String> =
+        taken.iter().map(|t| t.to_lowercase()).collect();
+    let mut out = Vec::with_capacity(wanted.len());
+    for w in wanted {
+        let base = if is_safe_file_name(w) { w } else { fallback };
+        let mut name = base.to_string();
+        let mut k = 2;
+        while !used.insert(name.to_lowercase()) {
+            name = format!("{base}_{k}");
+            k += 1;
+        }
+        out.push(name);
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -526,6 +595,10 @@ mod tests {
             Some(Format::Stl)
         );
         assert_eq!(Format::sniff(b"hello world\n"), None);
+        assert_eq!(Format::sniff(b"glTF\x02\0\0\0"), Some(Format::Glb));
+        let json = b"\xEF\xBB\xBF {\n  \"asset\": {\"version\": \"2.0\"}}";
+        assert_eq!(Format::sniff(json), Some(Format::Gltf));
+        assert_eq!(Format::sniff(b"{\"units\": \"m\"}"), None);
     }
 
     #[test]

@@ -96,3 +96,64 @@ pub fn assert_closed_components_outward(m: &TriMesh, what: &str) {
         }
     }
 }
+
+/// The third-party checkers of written files (`tools/ensure_test_tools.sh`): the Khronos glTF
+/// validator and trimesh, installed once into the target folder's `test-tools`.
+pub struct Tools {
+    dir: PathBuf,
+}
+
+/// The checkers, installed when missing. When they cannot be installed (no network) the test
+/// says so and is skipped, except under `CI=true`, where it fails.
+pub fn tools() -> Option<Tools> {
+    static READY: std::sync::OnceLock<Result<PathBuf, String>> = std::sync::OnceLock::new();
+    let ready = READY.get_or_init(|| {
+        let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
+            .parent()
+            .expect("the target folder")
+            .join("test-tools");
+        let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/ensure_test_tools.sh");
+        match Command::new("bash").arg(&script).arg(&dir).output() {
+            Ok(o) if o.status.success() => Ok(dir),
+            Ok(o) => Err(String::from_utf8_lossy(&o.stderr).into_owned()),
+            Err(e) => Err(e.to_string()),
+        }
+    });
+    match ready {
+        Ok(dir) => Some(Tools { dir: dir.clone() }),
+        Err(e) if std::env::var("CI").as_deref() == Ok("true") => {
+            panic!("CI=true and the glTF validator or trimesh cannot be installed: {e}")
+        }
+        Err(e) => {
+            eprintln!("skipping: the glTF validator or trimesh cannot be installed: {e}");
+            None
+        }
+    }
+}
+
+impl Tools {
+    fn lines(&self, mut cmd: Command) -> Vec<serde_json::Value> {
+        let o = cmd.output().expect("the checker runs");
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8_lossy(&o.stdout)
+            .lines()
+            .map(|l| serde_json::from_str(l).expect("one JSON object a line"))
+            .collect()
+    }
+
+    /// The validator's report of each file (`errors`, `warnings`, `messages`, ...).
+    pub fn validate(&self, files: &[&Path]) -> Vec<serde_json::Value> {
+        let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/gltf_validate.mjs");
+        let mut cmd = Command::new("node");
+        cmd.arg(script).arg(&self.dir).args(files);
+        self.lines(cmd)
+    }
+
+    /// What trimesh loads from each file (`vertices`, `faces`, `geometries`, `bounds`).
+    pub fn trimesh(&self, files: &[&Path]) -> Vec<serde_json::Value> {
+        let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/trimesh_counts.py");
+        let mut cmd = Command::new(self.dir.join("venv/bin/python"));
+        cmd.arg(script).args(files);
+        self.lines(cmd)
+    }
+}
