@@ -23,6 +23,10 @@ pub struct DrapeArgs {
     /// Print the JSON report instead of the summary.
     #[arg(long)]
     pub json: bool,
+    /// Also write `OUT_DIR/preview.png`: the cloth on the objects, from the front, right and
+    /// above.
+    #[arg(long)]
+    pub preview: bool,
 }
 
 /// One object in the report.
@@ -153,6 +157,8 @@ pub struct DrapeReport {
     pub objects: Vec<ObjectReport>,
     /// Per piece.
     pub pieces: Vec<PieceReport>,
+    /// The preview picture (`--preview`).
+    pub preview: Option<String>,
     /// Wall time of the whole command, s.
     pub command_seconds: f64,
 }
@@ -193,9 +199,14 @@ fn stage_pieces(
     for (i, p) in sc.pieces.iter().enumerate() {
         let mesh = piece_mesh(world, i, to_units);
         let mut files = Vec::new();
+        let rest = piece_rest(world, i, to_units);
         for ext in exts {
             let path = out.join(format!("{}.{ext}", p.name));
-            let (f, _) = io::stage_mesh(&path, &mesh, &WriteOptions::default(), inputs)?;
+            let f = if *ext == "obj" {
+                io::stage_obj_with_rest(&path, &mesh, &rest, &[], inputs)?
+            } else {
+                io::stage_mesh(&path, &mesh, &WriteOptions::default(), inputs)?.0
+            };
             staged.push(f);
             files.push(path.display().to_string());
         }
@@ -224,6 +235,55 @@ fn piece_mesh(world: &World, piece: usize, to_units: f64) -> TriMesh {
         .map(|t| t.map(|v| v - r.first as u32))
         .collect();
     TriMesh::new(positions, faces)
+}
+
+/// A piece's flat pattern coordinates (its rest geometry), in the output's units.
+fn piece_rest(world: &World, piece: usize, to_units: f64) -> Vec<[f64; 2]> {
+    let r = &world.model.pieces[piece];
+    world.model.rest[r.first..r.first + r.count]
+        .iter()
+        .map(|q| [q.x * to_units, q.y * to_units])
+        .collect()
+}
+
+/// Stages `OUT/preview.png`: every piece in the cloth's colour on the objects (grey), in the
+/// output's units, from the iso view. Returns its path.
+fn stage_preview(
+    world: &World,
+    out: &Path,
+    to_units: f64,
+    inputs: &[&Path],
+    staged: &mut Vec<io::Staged>,
+) -> anyhow::Result<String> {
+    use super::render::{CLOTH, OBJECT};
+    let pieces: Vec<TriMesh> = (0..world.model.pieces.len())
+        .map(|i| piece_mesh(world, i, to_units))
+        .collect();
+    let objects: Vec<TriMesh> = world
+        .colliders
+        .iter()
+        .map(|c| {
+            let mut m = c.mesh.clone();
+            crate::mesh::transform::scale(&mut m, to_units);
+            m
+        })
+        .collect();
+    use crate::render::{default_lift, Item};
+    let lift = default_lift(pieces.iter().chain(&objects).flat_map(|m| &m.positions));
+    let items: Vec<_> = pieces
+        .iter()
+        .map(|m| Item::cloth(m, CLOTH, None, lift))
+        .chain(objects.iter().map(|m| Item::object(m, OBJECT)))
+        .collect();
+    let path = out.join("preview.png");
+    staged.push(super::render::stage_preview(
+        &path,
+        &items,
+        crate::render::View::Iso,
+        crate::mesh::transform::Up::Z,
+        inputs,
+    )?);
+    Ok(path.display().to_string())
 }
 
 /// Runs `drapekit drape`.
@@ -271,10 +331,11 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
         })?;
         for (i, name) in names.iter().enumerate() {
             let p = frames_dir.join(format!("{name}_{step:07}.obj"));
-            let (f, _) = io::stage_mesh(
+            let f = io::stage_obj_with_rest(
                 &p,
                 &piece_mesh(w, i, to_units),
-                &WriteOptions::default(),
+                &piece_rest(w, i, to_units),
+                &[],
                 &inputs,
             )
             .map_err(|e| sim::SimError::Frame {
@@ -304,7 +365,14 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
             return Err(e.into());
         }
     };
-    let pieces = match stage_pieces(&sc, &world, out, &inputs, &mut staged).and_then(|p| {
+    let staged_all = stage_pieces(&sc, &world, out, &inputs, &mut staged).and_then(|p| {
+        let preview = args
+            .preview
+            .then(|| stage_preview(&world, out, to_units, &inputs, &mut staged))
+            .transpose()?;
+        Ok((p, preview))
+    });
+    let (pieces, preview) = match staged_all.and_then(|p| {
         io::commit(std::mem::take(&mut staged))
             .map(|()| p)
             .map_err(Into::into)
@@ -386,6 +454,7 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
         stable_step_estimate: world.stable_step,
         objects,
         pieces,
+        preview,
         command_seconds: start.elapsed().as_secs_f64(),
     };
     let out_path = args.output.clone();
