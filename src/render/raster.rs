@@ -87,8 +87,10 @@ fn rows(lo: f64, hi: f64, height: usize) -> Option<(usize, usize)> {
 /// let (a, b, c, d) = ([0.0, 0.0, 1.0], [4.0, 0.0, 1.0], [4.0, 4.0, 1.0], [0.0, 4.0, 1.0]);
 /// let buf = rasterise(&[[a, b, c], [a, c, d]], 4, 4);
 /// assert!(buf.iter().all(|f| f.is_covered()));
-/// // The diagonal's centres (0.5, 0.5), ... lie on the shared edge: the left one takes them.
-/// assert_eq!(buf.iter().filter(|f| f.triangle == 1).count(), 10);
+/// // The four centres (0.5, 0.5), ..., (3.5, 3.5) lie on the shared diagonal, a left edge of
+/// // triangle 0 (above it) and a right edge of triangle 1: triangle 0 takes them.
+/// assert_eq!(buf.iter().filter(|f| f.triangle == 0).count(), 6 + 4);
+/// assert_eq!(buf.iter().filter(|f| f.triangle == 1).count(), 6);
 /// ```
 pub fn rasterise(triangles: &[ScreenTriangle], width: usize, height: usize) -> Vec<Fragment> {
     let mut buf = vec![Fragment::EMPTY; width * height];
