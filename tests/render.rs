@@ -122,6 +122,7 @@ fn a_sphere_covers_its_analytic_projected_area_within_one_percent() {
         assert_eq!((pic.width, pic.height), (500, 400));
         let covered = pic.count(0, pic.width, |c| c != WHITE) as f64;
         let disc = std::f64::consts::PI * (0.3 * ppu).powi(2);
+        eprintln!("{view}: {covered} pixels covered, pi r^2 = {disc:.1}");
         assert!(
             (covered / disc - 1.0).abs() < 0.01,
             "{view}: {covered} pixels, pi r^2 = {disc:.0} (r = {:.1} px)",
