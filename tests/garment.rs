@@ -307,7 +307,7 @@ fn the_garment_command_reports_a_tube_on_a_cylinder() {
     let px: Vec<&[u8]> = buf.chunks(3).collect();
     assert!(
         px.iter()
-            .filter(|c| c[0] > c[1] + 40 && c[1] > c[2])
+            .filter(|c| u16::from(c[0]) > u16::from(c[1]) + 40 && c[1] > c[2])
             .count()
             > 5000
     );
