@@ -1,7 +1,8 @@
 //! drapekit: a garment-CAD toolchain.
 //!
 //! One pipeline, three jobs: convert CAD exports into clean, consistently oriented triangle
-//! meshes ([`io`], [`mesh`]); fit mannequins; drape cloth. `src/main.rs` only calls [`cli::main`].
+//! meshes ([`io`], [`mesh`]); fit mannequins; drape cloth; and draw pictures of the results
+//! ([`render`]). `src/main.rs` only calls [`cli::main`].
 
 pub mod cli;
 pub mod cloth;
@@ -13,5 +14,6 @@ pub mod io;
 pub mod math;
 pub mod mesh;
 pub mod par;
+pub mod render;
 pub mod scene;
 pub mod sim;

@@ -252,6 +252,7 @@ fn the_garment_command_reports_a_tube_on_a_cylinder() {
         "0.1",
         "--panels",
         "--glb",
+        "--preview",
         "--json",
     ]);
     let (stdout, stderr) = common::text(&o);
@@ -287,7 +288,35 @@ fn the_garment_command_reports_a_tube_on_a_cylinder() {
     // each panel alone: together they hold every particle and triangle once.
     assert_eq!(
         common::listing(&out),
-        vec!["column.obj", "panels", "tube.glb", "tube.obj"]
+        vec!["column.obj", "panels", "tube.glb", "tube.obj", "tube.png"]
+    );
+    // The garment carries its flat pattern (m, like the positions) as per-vertex `vt`: its
+    // strain is that of cloth, not of a unit mix-up (which would be -0.99 or 99).
+    let read = drapekit::io::read_mesh(&out.join("tube.obj"), &Default::default()).unwrap();
+    let rest = read.texcoords.expect("the flat pattern as vt");
+    let strain = drapekit::render::strain::vertex_strain(&read.mesh, &rest).unwrap();
+    let worst = strain.iter().fold(0f64, |m, s| m.max(s.abs()));
+    assert!(worst > 0.0 && worst < 0.3, "{worst}");
+    // The preview: the garment (terracotta) on the body (grey).
+    let png = png::Decoder::new(std::io::BufReader::new(
+        std::fs::File::open(out.join("tube.png")).unwrap(),
+    ));
+    let mut reader = png.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    assert_eq!((info.width, info.height), (640, 480));
+    let px: Vec<&[u8]> = buf.chunks(3).collect();
+    assert!(
+        px.iter()
+            .filter(|c| u16::from(c[0]) > u16::from(c[1]) + 40 && c[1] > c[2])
+            .count()
+            > 5000
+    );
+    assert!(
+        px.iter()
+            .filter(|c| c[0] == c[1] && c[1] == c[2] && c[0] < 250)
+            .count()
+            > 500
     );
     let garment = std::fs::read_to_string(out.join("tube.obj")).unwrap();
     assert!(garment.contains("g front") && garment.contains("g back"));

@@ -302,6 +302,9 @@ fn written_files_pass_the_khronos_validator_and_load_in_trimesh() {
         .map(|k| written[0][k] + 3 * (written[1][k] + written[2][k]))
         .collect();
     assert_eq!(loaded[4]["colored"], 7, "{}", loaded[4]);
+    // A drape's cloth carries its strain colours (the objects none): one piece, then 3 frames.
+    assert_eq!(loaded[2]["colored"], 1, "{}", loaded[2]);
+    assert_eq!(loaded[3]["colored"], 3, "{}", loaded[3]);
     assert_eq!(
         loaded[4]["color_sum"],
         serde_json::json!(want),

@@ -6,6 +6,7 @@ use crate::mesh::diagnose::ShellState;
 use crate::mesh::prepare::{prepare, PrepareOptions, PrepareReport};
 use crate::mesh::transform::{Units, Up};
 use crate::mesh::weld::WeldTolerance;
+use crate::mesh::TriMesh;
 use anyhow::bail;
 use clap::Args;
 use serde::Serialize;
@@ -61,6 +62,10 @@ pub struct ConvertArgs {
     /// Rotate to this up axis (needs --up).
     #[arg(long, value_name = "AXIS", value_parser = parse_up, requires = "up")]
     pub to_up: Option<Up>,
+    /// Also write a picture of the output beside it (`OUT` with the extension `.png`), from
+    /// the front, right and above, up being `--to-up`, else `--up`, else z.
+    #[arg(long)]
+    pub preview: bool,
 }
 
 fn parse_weld(s: &str) -> Result<WeldTolerance, String> {
@@ -132,6 +137,9 @@ pub struct ConvertReport {
     pub shell_state: ShellState,
     /// Wall time of the whole conversion, seconds.
     pub wall_seconds: f64,
+    /// The preview picture (`--preview`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub preview: Option<String>,
     /// What the reader found.
     pub read: ReadInfo,
     /// Every preparation step in detail, and the full diagnosis after.
@@ -187,7 +195,17 @@ pub fn run(args: ConvertArgs) -> anyhow::Result<()> {
         );
     }
     let inputs = [args.input.as_path()];
-    io::write_mesh(&args.output, &mesh, &wopts, &inputs)?;
+    let (staged, _) = io::stage_mesh(&args.output, &mesh, &wopts, &inputs)?;
+    let mut staged = vec![staged];
+    let preview = if args.preview {
+        let up = args.to_up.or(args.up).unwrap_or(Up::Z);
+        let p = super::render::preview_path(&args.output);
+        staged.push(stage_preview(&p, &args.output, &mesh, up, &inputs)?);
+        Some(p.display().to_string())
+    } else {
+        None
+    };
+    io::commit(staged)?;
     let report = ConvertReport {
         input: args.input.display().to_string(),
         output: args.output.display().to_string(),
@@ -210,6 +228,7 @@ pub fn run(args: ConvertArgs) -> anyhow::Result<()> {
         non_manifold_edges: prep.after.non_manifold_edges,
         shell_state: prep.after.shell_state,
         wall_seconds: start.elapsed().as_secs_f64(),
+        preview,
         read: read.info,
         prepare: prep,
     };
@@ -221,6 +240,24 @@ pub fn run(args: ConvertArgs) -> anyhow::Result<()> {
         args.json,
         |r| print_summary(r, &args.output),
     )
+}
+
+/// Stages the preview of `mesh` (the output `out`) at `path`.
+fn stage_preview(
+    path: &Path,
+    out: &Path,
+    mesh: &TriMesh,
+    up: Up,
+    inputs: &[&Path],
+) -> anyhow::Result<io::Staged> {
+    if path == out {
+        bail!(
+            "{}: the preview would be written over the output; give the output a mesh extension",
+            out.display()
+        );
+    }
+    let item = crate::render::Item::object(mesh, super::render::OBJECT);
+    super::render::stage_preview(path, &[item], crate::render::View::Iso, up, inputs)
 }
 
 fn print_summary(r: &ConvertReport, out: &Path) {

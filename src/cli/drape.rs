@@ -29,6 +29,10 @@ pub struct DrapeArgs {
     /// Print the JSON report instead of the summary.
     #[arg(long)]
     pub json: bool,
+    /// Also write `OUT_DIR/preview.png`: the cloth on the objects, from the front, right and
+    /// above.
+    #[arg(long)]
+    pub preview: bool,
 }
 
 /// One object in the report.
@@ -167,6 +171,8 @@ pub struct DrapeReport {
     pub warnings: Vec<String>,
     /// The glTF file (`--glb`).
     pub glb: Option<String>,
+    /// The preview picture (`--preview`).
+    pub preview: Option<String>,
     /// Wall time of the whole command, s.
     pub command_seconds: f64,
 }
@@ -207,9 +213,14 @@ fn stage_pieces(
     for (i, p) in sc.pieces.iter().enumerate() {
         let mesh = piece_mesh(world, i, to_units);
         let mut files = Vec::new();
+        let rest = piece_rest(world, i, to_units);
         for ext in exts {
             let path = out.join(format!("{}.{ext}", p.name));
-            let (f, _) = io::stage_mesh(&path, &mesh, &WriteOptions::default(), inputs)?;
+            let f = if *ext == "obj" {
+                io::stage_obj_with_rest(&path, &mesh, &rest, &[], inputs)?
+            } else {
+                io::stage_mesh(&path, &mesh, &WriteOptions::default(), inputs)?.0
+            };
             staged.push(f);
             files.push(path.display().to_string());
         }
@@ -320,10 +331,32 @@ fn gltf_scene(
             Surface::Solid,
         )
     });
+    // Each piece coloured by its strain (viridis, one scale for every frame: from 0 to the
+    // largest |strain| at the end, at least 0.1%).
+    let rest: Vec<Vec<[f64; 2]>> = (0..sc.pieces.len())
+        .map(|i| piece_rest(world, i, 1.0))
+        .collect();
+    let strain = |i: usize, m: &TriMesh| {
+        crate::render::strain::vertex_strain(m, &rest[i])
+            .unwrap_or_else(|_| vec![0.0; m.positions.len()])
+    };
+    let end = piece_meshes(world);
+    let top = (end.iter().enumerate())
+        .flat_map(|(i, m)| strain(i, m))
+        .fold(1e-3, |a: f64, s| a.max(s.abs()));
     let pieces = |meshes: Vec<TriMesh>| -> Vec<Part> {
-        let named = sc.pieces.iter().zip(meshes);
+        let named = sc.pieces.iter().zip(meshes).enumerate();
         named
-            .map(|(p, m)| Part::new(&p.name, to_gltf(m), Surface::Cloth))
+            .map(|(i, (p, m))| {
+                let values = strain(i, &m);
+                let colours = values.iter().map(|s| {
+                    let [r, g, b] = crate::render::colormap::viridis(s.abs() / top);
+                    [r as f32 / 255.0, g as f32 / 255.0, b as f32 / 255.0, 1.0]
+                });
+                let mut part = Part::new(&p.name, to_gltf(m), Surface::Cloth);
+                part.colors = Some(colours.collect());
+                part
+            })
             .collect()
     };
     let mut scene = gltf::Scene {
@@ -331,7 +364,7 @@ fn gltf_scene(
         frames: Vec::new(),
     };
     if frames.is_empty() {
-        scene.parts.extend(pieces(piece_meshes(world)));
+        scene.parts.extend(pieces(end));
         return scene;
     }
     let dt = sc.solver.dt;
@@ -347,10 +380,59 @@ fn gltf_scene(
         let time = steps as f64 * dt;
         scene.frames.push(Frame {
             time,
-            parts: pieces(piece_meshes(world)),
+            parts: pieces(end),
         });
     }
     scene
+}
+
+/// A piece's flat pattern coordinates (its rest geometry), in the output's units.
+fn piece_rest(world: &World, piece: usize, to_units: f64) -> Vec<[f64; 2]> {
+    let r = &world.model.pieces[piece];
+    world.model.rest[r.first..r.first + r.count]
+        .iter()
+        .map(|q| [q.x * to_units, q.y * to_units])
+        .collect()
+}
+
+/// Stages `OUT/preview.png`: every piece in the cloth's colour on the objects (grey), in the
+/// output's units, from the iso view. Returns its path.
+fn stage_preview(
+    world: &World,
+    out: &Path,
+    to_units: f64,
+    inputs: &[&Path],
+    staged: &mut Vec<io::Staged>,
+) -> anyhow::Result<String> {
+    use super::render::{CLOTH, OBJECT};
+    let pieces: Vec<TriMesh> = (0..world.model.pieces.len())
+        .map(|i| piece_mesh(world, i, to_units))
+        .collect();
+    let objects: Vec<TriMesh> = world
+        .colliders
+        .iter()
+        .map(|c| {
+            let mut m = c.mesh.clone();
+            crate::mesh::transform::scale(&mut m, to_units);
+            m
+        })
+        .collect();
+    use crate::render::{default_lift, Item};
+    let lift = default_lift(pieces.iter().chain(&objects).flat_map(|m| &m.positions));
+    let items: Vec<_> = pieces
+        .iter()
+        .map(|m| Item::cloth(m, CLOTH, None, lift))
+        .chain(objects.iter().map(|m| Item::object(m, OBJECT)))
+        .collect();
+    let path = out.join("preview.png");
+    staged.push(super::render::stage_preview(
+        &path,
+        &items,
+        crate::render::View::Iso,
+        crate::mesh::transform::Up::Z,
+        inputs,
+    )?);
+    Ok(path.display().to_string())
 }
 
 /// Runs `drapekit drape`.
@@ -405,10 +487,11 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
         })?;
         for (i, name) in names.iter().enumerate() {
             let p = frames_dir.join(format!("{name}_{step:07}.obj"));
-            let (f, _) = io::stage_mesh(
+            let f = io::stage_obj_with_rest(
                 &p,
                 &piece_mesh(w, i, to_units),
-                &WriteOptions::default(),
+                &piece_rest(w, i, to_units),
+                &[],
                 &inputs,
             )
             .map_err(|e| sim::SimError::Frame {
@@ -446,18 +529,23 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
             .map_or("scene".into(), |s| s.to_string_lossy());
         out.join(format!("{stem}.glb"))
     });
-    let written = (|| -> anyhow::Result<(Vec<PieceReport>, Vec<Vec<String>>)> {
+    type Written = (Vec<PieceReport>, Vec<Vec<String>>, Option<String>);
+    let written = (|| -> anyhow::Result<Written> {
         let pieces = stage_pieces(&sc, &world, out, &inputs, &mut staged)?;
         let objects = stage_objects(&sc, &world, &object_names, out, &inputs, &mut staged)?;
+        let preview = args
+            .preview
+            .then(|| stage_preview(&world, out, to_units, &inputs, &mut staged))
+            .transpose()?;
         if let Some(path) = &glb_path {
             let frames = glb_frames.take();
             let scene = gltf_scene(&sc, &world, &object_names, frames, stats.steps);
             staged.push(gltf::stage_scene(path, &scene, &inputs)?);
         }
         io::commit(std::mem::take(&mut staged))?;
-        Ok((pieces, objects))
+        Ok((pieces, objects, preview))
     })();
-    let (pieces, mut object_files) = match written {
+    let (pieces, mut object_files, preview) = match written {
         Ok(w) => w,
         Err(e) => {
             abandon(staged, out, existed);
@@ -538,6 +626,7 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
         pieces,
         warnings: placement,
         glb: glb_path.map(|p| p.display().to_string()),
+        preview,
         command_seconds: start.elapsed().as_secs_f64(),
     };
     let out_path = args.output.clone();

@@ -81,6 +81,10 @@ pub struct FitArgs {
     /// Print the JSON report instead of the summary.
     #[arg(long)]
     pub json: bool,
+    /// Also write a picture of the form beside it (`OUT` with the extension `.png`), from the
+    /// front.
+    #[arg(long)]
+    pub preview: bool,
 }
 
 fn parse_units(s: &str) -> Result<Units, String> {
@@ -139,6 +143,9 @@ pub struct FitCliReport {
     pub fit: FitReport,
     /// Wall time of the whole command, seconds.
     pub wall_seconds: f64,
+    /// The preview picture (`--preview`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub preview: Option<String>,
 }
 
 struct Source {
@@ -272,7 +279,30 @@ pub fn run(args: FitArgs) -> anyhow::Result<()> {
     let out_up = args.to_up.unwrap_or(src.up);
     change_up(&mut mesh, Up::Z, out_up);
     let inputs = [src.path.as_path()];
-    io::write_mesh(&args.output, &mesh, &wopts, &inputs)?;
+    let (staged, _) = io::stage_mesh(&args.output, &mesh, &wopts, &inputs)?;
+    let mut staged = vec![staged];
+    let preview = if args.preview {
+        let p = super::render::preview_path(&args.output);
+        if p == args.output {
+            anyhow::bail!(
+                "{}: the preview would be written over the output; give the output a mesh extension",
+                args.output.display()
+            );
+        }
+        let item = crate::render::Item::object(&mesh, super::render::OBJECT);
+        let view = crate::render::View::Front;
+        staged.push(super::render::stage_preview(
+            &p,
+            &[item],
+            view,
+            out_up,
+            &inputs,
+        )?);
+        Some(p.display().to_string())
+    } else {
+        None
+    };
+    io::commit(staged)?;
     let report = FitCliReport {
         input: src.path.display().to_string(),
         source: src.kind,
@@ -285,6 +315,7 @@ pub fn run(args: FitArgs) -> anyhow::Result<()> {
         band: src.band,
         fit: fitted.report,
         wall_seconds: start.elapsed().as_secs_f64(),
+        preview,
     };
     super::finish(
         &report,

@@ -70,6 +70,9 @@ pub struct GarmentArgs {
     /// Also write OUT_DIR/<garment>.glb: each panel and the body as placed (metres, y up).
     #[arg(long)]
     pub glb: bool,
+    /// Also write `OUT_DIR/<garment>.png`: the garment on the body, from the front.
+    #[arg(long)]
+    pub preview: bool,
 }
 
 /// The report of `drapekit garment`.
@@ -311,27 +314,35 @@ fn write_glb(
     Ok(())
 }
 
-/// Writes an OBJ with a group per panel.
+/// Writes an OBJ with a group per panel and each particle's flat pattern place (m) as `vt`.
 fn write_groups(
     path: &Path,
     mesh: &TriMesh,
+    rest: &[crate::math::Point2],
     groups: &[(String, usize, usize)],
     inputs: &[&Path],
 ) -> anyhow::Result<()> {
-    io::write_atomic(path, inputs, |w| {
-        use std::io::Write;
-        writeln!(w, "# drapekit garment: {} panels", groups.len())?;
-        for p in &mesh.positions {
-            writeln!(w, "v {:?} {:?} {:?}", p.x, p.y, p.z)?;
-        }
-        for (name, first, count) in groups {
-            writeln!(w, "g {name}")?;
-            for f in &mesh.faces[*first..first + count] {
-                writeln!(w, "f {} {} {}", f[0] + 1, f[1] + 1, f[2] + 1)?;
-            }
-        }
-        Ok(())
-    })?;
+    let rest: Vec<[f64; 2]> = rest.iter().map(|q| [q.x, q.y]).collect();
+    io::stage_obj_with_rest(path, mesh, &rest, groups, inputs)?.commit()?;
+    Ok(())
+}
+
+/// Writes `OUT_DIR/<garment>.png`: the garment on the body, y up, from the front.
+fn write_preview(
+    path: &Path,
+    garment: &TriMesh,
+    body: &TriMesh,
+    inputs: &[&Path],
+) -> anyhow::Result<()> {
+    use super::render::{CLOTH, OBJECT};
+    use crate::render::{default_lift, Item};
+    let lift = default_lift(garment.positions.iter().chain(&body.positions));
+    let items = [
+        Item::cloth(garment, CLOTH, None, lift),
+        Item::object(body, OBJECT),
+    ];
+    super::render::stage_preview(path, &items, crate::render::View::Front, Up::Y, inputs)?
+        .commit()?;
     Ok(())
 }
 
@@ -415,7 +426,7 @@ pub fn run(args: GarmentArgs) -> anyhow::Result<()> {
         .to_string();
     let (mesh, groups) = garment_mesh(&g.world);
     let garment_path = args.output.join(format!("{name}.obj"));
-    write_groups(&garment_path, &mesh, &groups, &inputs)?;
+    write_groups(&garment_path, &mesh, &g.world.model.rest, &groups, &inputs)?;
     let mut files = vec![garment_path.display().to_string()];
     if args.panels {
         files.extend(write_panels(
@@ -438,10 +449,19 @@ pub fn run(args: GarmentArgs) -> anyhow::Result<()> {
         &io::WriteOptions::default(),
         &inputs,
     )?;
+    let mut files: Vec<String> = files
+        .into_iter()
+        .chain([body_path.display().to_string()])
+        .collect();
     if args.glb {
         let path = args.output.join(format!("{name}.glb"));
         write_glb(&path, &mesh, &groups, (&body_name, &body_mesh), &inputs)?;
         files.push(path.display().to_string());
+    }
+    if args.preview {
+        let p = args.output.join(format!("{name}.png"));
+        write_preview(&p, &mesh, &body_mesh, &inputs)?;
+        files.push(p.display().to_string());
     }
     let mut assumed = vec![body_note];
     assumed.push(format!(
@@ -474,10 +494,7 @@ pub fn run(args: GarmentArgs) -> anyhow::Result<()> {
         thresholds,
         verdict: if failed.is_empty() { "pass" } else { "fail" }.into(),
         failed,
-        files: files
-            .into_iter()
-            .chain([body_path.display().to_string()])
-            .collect(),
+        files,
         wall_seconds: start.elapsed().as_secs_f64(),
     };
     super::finish(

@@ -15,6 +15,7 @@ mod drape;
 mod fit;
 mod garment;
 mod inspect;
+mod render;
 
 use crate::io::Format;
 use crate::mesh::polygon::QuadSplit;
@@ -50,6 +51,9 @@ pub enum Command {
     Drape(drape::DrapeArgs),
     /// Sew a GarmentCode pattern on a body and let it hang (no scene file needed).
     Garment(garment::GarmentArgs),
+    /// Draw meshes into a PNG or GIF: named views or three projections, coloured by strain,
+    /// distance to the body or contact; a drape's frames as an animation.
+    Render(render::RenderArgs),
     /// Benchmarks (speed against a baseline in the same run).
     #[command(subcommand)]
     Bench(bench::BenchCommand),
@@ -106,6 +110,7 @@ pub fn main() -> ExitCode {
         Command::Fit(a) => fit::run(a),
         Command::Drape(a) => drape::run(a),
         Command::Garment(a) => garment::run(a),
+        Command::Render(a) => render::run(a),
         Command::Bench(b) => bench::run(b),
     };
     match result {

@@ -4,7 +4,7 @@
 use super::elements::{bend, Spring, SpringKind};
 use super::fabric::Fabric;
 use super::pattern::Piece;
-use crate::math::{Point3, Vec3};
+use crate::math::{Point2, Point3, Vec3};
 use serde::Serialize;
 
 /// One piece's place in the model.
@@ -59,6 +59,9 @@ pub struct ClothModel {
     pub bend_adj: Vec<(u32, f64)>,
     /// Triangles of all pieces (for output, strain, areas).
     pub triangles: Vec<[u32; 3]>,
+    /// Each particle's place in its flat pattern piece, m (the rest geometry: triangle edges
+    /// are at rest at these lengths). Written as `vt` in the drape and garment OBJ files.
+    pub rest: Vec<Point2>,
     /// The pieces.
     pub pieces: Vec<PieceRange>,
     /// Gravity, m/s^2.
@@ -91,6 +94,7 @@ impl ClothModel {
             bend_adj_start: Vec::new(),
             bend_adj: Vec::new(),
             triangles: Vec::new(),
+            rest: Vec::new(),
             pieces: Vec::new(),
             gravity,
             external: Vec::new(),
@@ -131,6 +135,7 @@ impl ClothModel {
             }
             m.triangles
                 .extend(p.triangles.iter().map(|t| t.map(|v| v + off)));
+            m.rest.extend_from_slice(&p.flat);
             x.extend_from_slice(placed);
         }
         m.index_springs();

@@ -189,6 +189,10 @@ pub struct ReadOutput {
     pub mesh: TriMesh,
     /// What the file held.
     pub info: ReadInfo,
+    /// Per-vertex texture coordinates (OBJ `vt`), when the file has exactly one per vertex and
+    /// every face corner that names one names its vertex's own: drapekit's drape and garment
+    /// outputs carry each particle's flat pattern place there (see `obj::write_with_rest`).
+    pub texcoords: Option<Vec<[f64; 2]>>,
 }
 
 /// Bytes read from the start of a file to tell its format (sniffing reads up to 1000 lines).
@@ -384,6 +388,32 @@ pub fn stage_mesh(
         e => e,
     })?;
     Ok((staged, format))
+}
+
+/// Writes `mesh` as OBJ with one rest point per vertex (`obj::write_with_rest`, faces grouped
+/// by `groups`: `(name, first face, faces)`, none for one group) for `path`, [`Staged`].
+/// Refuses non-finite positions or rest points.
+pub fn stage_obj_with_rest(
+    path: &Path,
+    mesh: &TriMesh,
+    rest: &[[f64; 2]],
+    groups: &[(String, usize, usize)],
+    inputs: &[&Path],
+) -> Result<Staged, IoError> {
+    let bad = mesh
+        .positions
+        .iter()
+        .position(|p| !p.iter().all(|c| c.is_finite()))
+        .or_else(|| rest.iter().position(|r| !r.iter().all(|c| c.is_finite())));
+    if let Some(v) = bad {
+        return Err(IoError::NonFinite {
+            path: path.to_path_buf(),
+            vertex: v,
+        });
+    }
+    stage(path, inputs, |w| {
+        obj::write_with_rest(w, mesh, rest, groups)
+    })
 }
 
 /// Whether two paths name the same existing file.

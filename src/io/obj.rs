@@ -25,7 +25,6 @@ const FORMAT: &str = "OBJ";
 
 /// Statements skipped without comment.
 const SKIPPED: &[&[u8]] = &[
-    b"vt",
     b"vn",
     b"vp",
     b"o",
@@ -97,7 +96,6 @@ fn push_continued(logical: &mut Vec<u8>, part: &[u8]) {
 }
 
 /// What the statements read so far hold.
-#[derive(Default)]
 struct State {
     problems: Problems,
     positions: Vec<Point3>,
@@ -106,6 +104,25 @@ struct State {
     face_lines: Vec<u64>,
     ring: Vec<u32>,
     skipped: BTreeMap<String, (usize, u64)>,
+    /// Texture coordinates (`vt`) read, and whether they can still be per-vertex: every one
+    /// readable and every face corner naming a `vt` naming its vertex's own index.
+    texcoords: Vec<[f64; 2]>,
+    texcoords_per_vertex: bool,
+}
+
+impl Default for State {
+    fn default() -> State {
+        State {
+            problems: Problems::default(),
+            positions: Vec::new(),
+            polys: Polygons::default(),
+            face_lines: Vec::new(),
+            ring: Vec::new(),
+            skipped: BTreeMap::new(),
+            texcoords: Vec::new(),
+            texcoords_per_vertex: true,
+        }
+    }
 }
 
 impl State {
@@ -120,6 +137,7 @@ impl State {
         match key {
             b"v" => self.vertex(ln, w),
             b"f" | b"fo" => self.face(ln, w),
+            b"vt" => self.texcoord(w),
             k if SKIPPED.contains(&k) => {}
             k => {
                 let name = if FREEFORM.contains(&k) {
@@ -157,6 +175,36 @@ impl State {
         }
     }
 
+    /// A `vt u [v [w]]` line: kept as `[u, v]`. Texture coordinates never stop a read: one
+    /// that is unreadable only means the file has no per-vertex coordinates.
+    fn texcoord<'a>(&mut self, mut w: impl Iterator<Item = &'a [u8]>) {
+        let mut uv = [0.0; 2];
+        for c in &mut uv {
+            match w.next().map(text::number) {
+                Some(Ok(v)) => *c = v,
+                Some(Err(_)) => self.texcoords_per_vertex = false,
+                None => {}
+            }
+        }
+        self.texcoords.push(uv);
+    }
+
+    /// Whether face corner `tok` (`v/vt/vn`) names a `vt` other than its vertex `v` (0-based).
+    fn corner_texcoord_differs(&self, tok: &[u8], v: u32) -> bool {
+        let Some(t) = tok.split(|&b| b == b'/').nth(1).filter(|t| !t.is_empty()) else {
+            return false;
+        };
+        let count = self.texcoords.len() as i64;
+        match std::str::from_utf8(t)
+            .ok()
+            .and_then(|s| s.parse::<i64>().ok())
+        {
+            Some(i) if i > 0 => i - 1 != i64::from(v),
+            Some(i) if i < 0 => count + i != i64::from(v),
+            _ => true,
+        }
+    }
+
     fn face<'a>(&mut self, ln: u64, w: impl Iterator<Item = &'a [u8]>) {
         self.ring.clear();
         let count = self.positions.len() as i64;
@@ -177,8 +225,13 @@ impl State {
                         },
                     )
                 }
-                Some(i) if i < 0 => self.ring.push((count + i) as u32),
-                Some(i) => self.ring.push((i - 1) as u32),
+                Some(i) => {
+                    let v = if i < 0 { count + i } else { i - 1 } as u32;
+                    if self.corner_texcoord_differs(tok, v) {
+                        self.texcoords_per_vertex = false;
+                    }
+                    self.ring.push(v);
+                }
                 None => self
                     .problems
                     .line(ln, ProblemKind::BadIndex { token: show(tok) }),
@@ -234,11 +287,59 @@ impl State {
             warnings,
             ..ReadInfo::default()
         };
+        let texcoords = (self.texcoords_per_vertex && self.texcoords.len() == n && n > 0)
+            .then_some(self.texcoords);
         Ok(ReadOutput {
             mesh: TriMesh::new(self.positions, faces),
             info,
+            texcoords,
         })
     }
+}
+
+/// Writes `mesh` as OBJ with `rest[i]` as vertex `i`'s texture coordinates (`vt u v`, one per
+/// vertex, each number in its shortest exact form) and faces `f a/a b/b c/c`. drapekit puts
+/// each particle's flat pattern place there, in the unit of `v`: `render --color strain` reads
+/// the rest lengths back from them. `rest` must have one entry per vertex.
+pub fn write_with_rest(
+    w: &mut impl Write,
+    mesh: &TriMesh,
+    rest: &[[f64; 2]],
+    groups: &[(String, usize, usize)],
+) -> std::io::Result<()> {
+    assert_eq!(
+        rest.len(),
+        mesh.positions.len(),
+        "one rest point per vertex"
+    );
+    writeln!(
+        w,
+        "# drapekit: {} vertices, {} triangles; vt = flat pattern (rest) coordinates",
+        mesh.positions.len(),
+        mesh.faces.len()
+    )?;
+    for p in &mesh.positions {
+        writeln!(w, "v {:?} {:?} {:?}", p.x, p.y, p.z)?;
+    }
+    for t in rest {
+        writeln!(w, "vt {:?} {:?}", t[0], t[1])?;
+    }
+    let whole = [(String::new(), 0, mesh.faces.len())];
+    let groups = if groups.is_empty() {
+        &whole[..]
+    } else {
+        groups
+    };
+    for (name, first, count) in groups {
+        if !name.is_empty() {
+            writeln!(w, "g {name}")?;
+        }
+        for f in &mesh.faces[*first..first + count] {
+            let [a, b, c] = f.map(|v| v + 1);
+            writeln!(w, "f {a}/{a} {b}/{b} {c}/{c}")?;
+        }
+    }
+    Ok(())
 }
 
 /// Writes `mesh` as OBJ.
@@ -276,6 +377,35 @@ mod tests {
     fn continuation_and_slashes() {
         let r = read_str("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/1/1 \\\n 2//2 3/3\n").unwrap();
         assert_eq!(r.mesh.faces, vec![[0, 1, 2]]);
+    }
+
+    #[test]
+    fn rest_coordinates_round_trip_per_vertex() {
+        let mesh = TriMesh::new(
+            vec![
+                Point3::new(0.0, 0.0, 0.5),
+                Point3::new(1.0, 0.0, 0.5),
+                Point3::new(0.0, 1.0, 0.5),
+            ],
+            vec![[0, 1, 2]],
+        );
+        let rest = [[0.0, 0.0], [0.9, 0.0], [0.1, 0.95]];
+        let mut buf = Vec::new();
+        write_with_rest(&mut buf, &mesh, &rest, &[("front".into(), 0, 1)]).unwrap();
+        let r = read(Path::new("m.obj"), &buf, &ReadOptions::default()).unwrap();
+        assert_eq!(r.mesh, mesh);
+        assert_eq!(r.texcoords.as_deref(), Some(&rest[..]));
+        // Coordinates that are not one per vertex are not per-vertex coordinates.
+        let r =
+            read_str("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/3 3/2\n").unwrap();
+        assert_eq!(r.texcoords, None);
+        let r = read_str("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nf 1/1 2/2 3\n").unwrap();
+        assert_eq!(r.texcoords, None);
+        let r = read_str("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt x 1\nf 1 2 3\n").unwrap();
+        assert_eq!(
+            r.texcoords, None,
+            "an unreadable vt is no error, and no coordinates"
+        );
     }
 
     #[test]

@@ -515,6 +515,7 @@ pub fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<ReadOutput,
         ..ReadInfo::default()
     };
     Ok(ReadOutput {
+        texcoords: None,
         mesh: TriMesh::new(positions, faces),
         info,
     })

@@ -152,6 +152,7 @@ fn read_binary(path: &Path, bytes: &[u8]) -> Result<ReadOutput, IoError> {
         ..ReadInfo::default()
     };
     Ok(ReadOutput {
+        texcoords: None,
         mesh: TriMesh::new(positions, faces),
         info,
     })
@@ -365,6 +366,7 @@ fn read_ascii(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<ReadOutpu
         ..ReadInfo::default()
     };
     Ok(ReadOutput {
+        texcoords: None,
         mesh: TriMesh::new(positions, faces),
         info,
     })

@@ -173,6 +173,7 @@ pub fn read_from(
         ..ReadInfo::default()
     };
     Ok(ReadOutput {
+        texcoords: None,
         mesh: TriMesh::new(positions, faces),
         info,
     })

@@ -91,7 +91,11 @@ pub fn read(path: &Path, bytes: &[u8]) -> Result<ReadOutput, IoError> {
         warnings,
         ..ReadInfo::default()
     };
-    Ok(ReadOutput { mesh, info })
+    Ok(ReadOutput {
+        mesh,
+        info,
+        texcoords: None,
+    })
 }
 
 /// Appends primitive `p` carried by `world` to `mesh`.
