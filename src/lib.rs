@@ -3,6 +3,7 @@
 //! One pipeline, three jobs: convert CAD exports into clean, consistently oriented triangle
 //! meshes ([`io`], [`mesh`]); fit mannequins; drape cloth. `src/main.rs` only calls [`cli::main`].
 
+pub mod batch;
 pub mod cli;
 pub mod cloth;
 pub mod collide;

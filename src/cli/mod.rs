@@ -2,6 +2,7 @@
 //! structs before any work starts; errors print their whole chain and exit with status 1 (2 for
 //! usage errors, from clap).
 
+mod batch;
 mod bench;
 mod bench_drape;
 mod bench_fit;
@@ -50,6 +51,9 @@ pub enum Command {
     Drape(drape::DrapeArgs),
     /// Sew a GarmentCode pattern on a body and let it hang (no scene file needed).
     Garment(garment::GarmentArgs),
+    /// Batches: a plan's garments x bodies x fabrics x sizes, here or on a scheduler.
+    #[command(subcommand)]
+    Batch(batch::BatchCommand),
     /// Benchmarks (speed against a baseline in the same run).
     #[command(subcommand)]
     Bench(bench::BenchCommand),
@@ -106,6 +110,7 @@ pub fn main() -> ExitCode {
         Command::Fit(a) => fit::run(a),
         Command::Drape(a) => drape::run(a),
         Command::Garment(a) => garment::run(a),
+        Command::Batch(b) => batch::run(b, cli.jobs),
         Command::Bench(b) => bench::run(b),
     };
     match result {
