@@ -374,7 +374,7 @@ fn a_bad_job_fails_alone_with_its_error() {
     assert_eq!(bad["state"], "failed");
     let err = bad["error"].as_str().unwrap();
     assert!(
-        err.contains("broken.obj") && err.contains("line 2"),
+        err.contains("broken.obj:2: a vertex needs 3 coordinates"),
         "{err}"
     );
     let good = json(&out.join("jobs/square.ball.cotton/status.json"));

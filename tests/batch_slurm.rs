@@ -96,29 +96,32 @@ fn example_plan_as_a_slurm_array_matches_a_local_run() {
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", text(&o).1);
-    // Submit and wait for the whole array (sbatch --wait), at most 5 minutes.
-    let mut sub = cluster
+    // Submit, and wait until the array has left the queue (at most 5 minutes).
+    let o = cluster
         .cmd("sbatch")
-        .args(["--wait", "--parsable"])
+        .arg("--parsable")
         .arg(out.join("batch.sbatch"))
-        .stdout(std::process::Stdio::piped())
-        .spawn()
+        .output()
         .unwrap();
+    assert!(o.status.success(), "sbatch: {}", text(&o).1);
+    let id = String::from_utf8_lossy(&o.stdout).trim().to_string();
     let deadline = Instant::now() + Duration::from_secs(300);
-    let status = loop {
-        if let Some(s) = sub.try_wait().unwrap() {
-            break s;
+    loop {
+        let q = cluster
+            .cmd("squeue")
+            .args(["-h", "-j", &id])
+            .output()
+            .unwrap();
+        assert!(q.status.success(), "squeue: {}", text(&q).1);
+        if q.stdout.iter().all(u8::is_ascii_whitespace) {
+            break;
         }
         if Instant::now() > deadline {
-            let _ = cluster.cmd("scancel").arg("--user=root").status();
-            let _ = sub.kill();
-            panic!("the array did not finish within 5 minutes");
+            let _ = cluster.cmd("scancel").arg(&id).status();
+            panic!("array job {id} did not finish within 5 minutes");
         }
         std::thread::sleep(Duration::from_millis(200));
-    };
-    let mut id = String::new();
-    std::io::Read::read_to_string(sub.stdout.as_mut().unwrap(), &mut id).unwrap();
-    assert!(status.success(), "sbatch --wait: {status} (array job {id})");
+    }
     let slurm = table(&out);
     assert_eq!(slurm.len(), 8);
     // Every task logged through Slurm into OUT/logs.
@@ -140,6 +143,7 @@ fn example_plan_as_a_slurm_array_matches_a_local_run() {
         .unwrap();
     assert!(o.status.success(), "{}", text(&o).1);
     let local = table(&local);
+    assert_eq!(local.len(), 8);
     for (s, l) in slurm.iter().zip(&local) {
         assert_eq!(s["state"], "done", "{s}");
         for k in [
@@ -156,5 +160,22 @@ fn example_plan_as_a_slurm_array_matches_a_local_run() {
         ] {
             assert_eq!(s[k], l[k], "{k} of {}", s["id"]);
         }
+    }
+    // Stopped, no daemon is left.
+    let pids: Vec<String> = ["munged", "slurmctld", "slurmd"]
+        .iter()
+        .map(|d| {
+            std::fs::read_to_string(cluster.dir.path().join(format!("{d}.pid")))
+                .unwrap()
+                .trim()
+                .to_string()
+        })
+        .collect();
+    drop(cluster);
+    for p in pids {
+        assert!(
+            !Path::new("/proc").join(&p).exists(),
+            "daemon {p} still runs"
+        );
     }
 }

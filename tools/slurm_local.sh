@@ -75,7 +75,9 @@ if ! flock -w 1200 9; then
     echo "slurm_local.sh: another local cluster holds $LOCK" >&2
     exit 4
 fi
-( exec sleep 100000 ) 9>&9 &
+# (every process left running has its output away from the caller's pipes, so a caller reading
+# this script's output to the end is not kept waiting by the daemons)
+( exec sleep 100000 ) 9>&9 </dev/null >/dev/null 2>&1 &
 echo $! > "$dir/lock.pid"
 exec 9>&-
 
@@ -90,7 +92,7 @@ chmod 700 "$dir/munge"
 chmod 600 "$key"
 sock="$dir/munge/munge.socket"
 munged --force --key-file="$key" --socket="$sock" --pid-file="$dir/munged.pid" \
-    --log-file="$dir/munged.log" --seed-file="$dir/munge/seed"
+    --log-file="$dir/munged.log" --seed-file="$dir/munge/seed" </dev/null >>"$dir/daemons.out" 2>&1
 
 cat > "$dir/slurm.conf" <<EOF
 ClusterName=drapekit-local
@@ -111,6 +113,7 @@ TaskPlugin=task/none
 SelectType=select/cons_tres
 SelectTypeParameters=CR_Core_Memory
 SchedulerType=sched/backfill
+SchedulerParameters=sched_interval=1,bf_interval=1,sched_min_interval=100000
 MpiDefault=none
 ReturnToService=2
 SlurmctldTimeout=30
@@ -125,7 +128,6 @@ MaxArraySize=100001
 NodeName=$host NodeAddr=127.0.0.1 CPUs=$cpus RealMemory=$mem_mb State=UNKNOWN
 PartitionName=local Nodes=$host Default=YES MaxTime=INFINITE State=UP
 EOF
-: > "$dir/cgroup.conf"
 export SLURM_CONF="$dir/slurm.conf"
 
 cleanup_on_fail() {
@@ -135,8 +137,8 @@ cleanup_on_fail() {
 }
 trap cleanup_on_fail ERR
 
-slurmctld -i
-slurmd
+slurmctld -i </dev/null >>"$dir/daemons.out" 2>&1
+slurmd </dev/null >>"$dir/daemons.out" 2>&1
 
 for _ in $(seq 1 120); do
     state=$(sinfo -h -N -o '%T' 2>/dev/null | head -n 1 || true)
