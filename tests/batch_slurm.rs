@@ -131,6 +131,21 @@ fn example_plan_as_a_slurm_array_matches_a_local_run() {
         8,
         "{logs:?}"
     );
+    // Each array task ran exactly the job at its own position, once.
+    for r in &slurm {
+        let log = out.join("logs").join(format!("{id}_{}.out", r["position"]));
+        let log = std::fs::read_to_string(&log).unwrap();
+        let line = format!("{} {}", r["position"], r["id"].as_str().unwrap());
+        let said = |l: &str| l.split_whitespace().collect::<Vec<_>>().join(" ");
+        assert!(
+            log.lines().any(|l| said(l).starts_with(&line)),
+            "{line} not in {log}"
+        );
+        assert!(
+            log.contains(": 1 jobs, 0 skipped (done), 1 done, 0 failed"),
+            "{log}"
+        );
+    }
     // The same plan on this machine.
     let local = work.path().join("local");
     let o = drapekit()
