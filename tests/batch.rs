@@ -430,9 +430,13 @@ fn index_flag_and_scheduler_variables_select_the_same_job() {
         let o = c.output().unwrap();
         assert!(o.status.success(), "{name}: {}", text(&o).1);
         let v: Value = serde_json::from_slice(&o.stdout).unwrap();
-        assert_eq!(ran_ids(&v), [want.clone()], "{name}");
+        assert_eq!(ran_ids(&v), std::slice::from_ref(&want), "{name}");
         let dirs = common::listing(&out.join("jobs"));
-        assert_eq!(dirs, [want.clone()], "{name}: only that job ran");
+        assert_eq!(
+            dirs,
+            std::slice::from_ref(&want),
+            "{name}: only that job ran"
+        );
     }
     // Out of range: a clear error.
     let o = drapekit()
@@ -482,4 +486,68 @@ fn slurm_script_has_the_array_resources_and_command() {
     )));
     assert!(out.join("logs").is_dir());
     assert_eq!(order::load(&out).unwrap().len(), 8);
+}
+
+#[test]
+fn pattern_jobs_on_a_fitted_body_fit_it_once_and_scale_it() {
+    let Some(real) = common::realdata() else {
+        return;
+    };
+    let d = tempfile::tempdir().unwrap();
+    let plan = format!(
+        "fabrics = [\"cotton\"]\n[garment_solver]\nsew_max = 0.1\nsettle_max = 0.1\n\
+         [[garment]]\nname = \"dress\"\npattern = \"{}\"\nspacing = 0.04\n\
+         [[body]]\nname = \"f38\"\nmeasurements = \"{}\"\n\
+         [[size]]\nname = \"s\"\nscale = 0.95\n[[size]]\nname = \"m\"\nscale = 1.0\n",
+        real.join("patterns/dress_pencil_specification.json")
+            .display(),
+        fixture("measurements_size38.toml")
+            .canonicalize()
+            .unwrap()
+            .display()
+    );
+    let p = write(d.path(), "plan.toml", &plan);
+    let out = d.path().join("out");
+    let (o, v) = run_batch(&p, &out, &[]);
+    assert!(o.status.success(), "{}", text(&o).1);
+    assert_eq!(v["done"], 2, "{v}");
+    // One fitted form (size m uses it as it is: y up, scale 1), one scaled copy for size s.
+    let bodies = common::listing(&out.join("bodies"));
+    assert_eq!(bodies.len(), 2, "{bodies:?}");
+    let form = bodies.iter().find(|b| !b.starts_with("f38-s-")).unwrap();
+    let small = bodies.iter().find(|b| b.starts_with("f38-s-")).unwrap();
+    let top = |f: &str| {
+        let m = read_mesh(&out.join("bodies").join(f), &ReadOptions::default())
+            .unwrap()
+            .mesh;
+        m.positions
+            .iter()
+            .map(|q| q.y)
+            .fold(f64::NEG_INFINITY, f64::max)
+    };
+    assert!((top(small) / top(form) - 0.95).abs() < 1e-9);
+    // In metres, y up: the torso of a 168 cm body ends at its neck base, near 1.47 m.
+    assert!((1.3..1.6).contains(&top(form)), "{}", top(form));
+    // The table carries the garment report's verdict, seam gap, crossings and strain.
+    let o = drapekit()
+        .args(["batch", "collect", "--json"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let rows: Value = serde_json::from_slice(&o.stdout).unwrap();
+    for r in rows.as_array().unwrap() {
+        let rep = json(
+            &out.join("jobs")
+                .join(r["id"].as_str().unwrap())
+                .join("report.json"),
+        );
+        assert_eq!(r["kind"], "pattern");
+        assert_eq!(r["verdict"], rep["verdict"]);
+        assert_eq!(r["seam_gap_max_mm"], rep["garment"]["seam_gap_max_mm"]);
+        assert_eq!(r["body_crossings"], rep["garment"]["body_crossing_edges"]);
+        assert_eq!(r["self_crossings"], rep["garment"]["self_crossing_edges"]);
+        assert_eq!(r["max_strain"], rep["garment"]["max_strain"]);
+        assert_eq!(rep["spacing"], 0.04);
+        assert!(rep["body"].as_str().unwrap().contains("/bodies/f38-"));
+    }
 }
