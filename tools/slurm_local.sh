@@ -10,7 +10,8 @@
 #
 # Use the cluster with SLURM_CONF=DIR/slurm.conf. Slurm's ports are fixed (6817, 6818): one such
 # cluster runs at a time on a machine, so `start` holds an exclusive lock (/tmp/drapekit-slurm.lock,
-# flock) from start to stop; a second `start` waits for it (up to 20 minutes).
+# flock) from start to stop (or until the caller dies); a second `start` waits for it (up to 20 minutes)
+# and first stops any daemon an earlier, killed caller left running.
 # Needs root (it installs packages and runs slurmd, which starts jobs as their users).
 set -euo pipefail
 
@@ -45,7 +46,7 @@ stop_daemons() {
 if [[ "$cmd" == stop ]]; then
     dir=$(realpath "$dir")
     stop_daemons "$dir"
-    # Release the lock: the holder is the sleeping process recorded at start.
+    # Release the lock: the holder is the waiting process recorded at start.
     if [[ -s "$dir/lock.pid" ]]; then
         kill "$(cat "$dir/lock.pid")" 2>/dev/null || true
         rm -f "$dir/lock.pid"
@@ -77,9 +78,20 @@ if ! flock -w 1200 9; then
 fi
 # (every process left running has its output away from the caller's pipes, so a caller reading
 # this script's output to the end is not kept waiting by the daemons)
-( exec sleep 100000 ) 9>&9 </dev/null >/dev/null 2>&1 &
+# The holder lives as long as the caller (this script's parent) at most: a caller killed before
+# `stop` blocks the next one for a second, not for ever.
+caller=$PPID
+( while kill -0 "$caller" 2>/dev/null; do sleep 1; done ) 9>&9 </dev/null >/dev/null 2>&1 &
 echo $! > "$dir/lock.pid"
 exec 9>&-
+# Daemons of an earlier cluster whose caller was killed before `stop` hold Slurm's ports: stop
+# them (their folder is recorded in OWNER).
+OWNER=/tmp/drapekit-slurm.owner
+if [[ -s "$OWNER" ]]; then
+    old=$(cat "$OWNER")
+    [[ "$old" != "$dir" && -d "$old" ]] && stop_daemons "$old"
+fi
+echo "$dir" > "$OWNER"
 
 host=$(hostname -s)
 cpus=$(nproc)
