@@ -4,6 +4,7 @@
 //! meshes ([`io`], [`mesh`]); fit mannequins; drape cloth; and draw pictures of the results
 //! ([`render`]). `src/main.rs` only calls [`cli::main`].
 
+pub mod batch;
 pub mod cli;
 pub mod cloth;
 pub mod collide;

@@ -2,6 +2,7 @@
 //! structs before any work starts; errors print their whole chain and exit with status 1 (2 for
 //! usage errors, from clap).
 
+mod batch;
 mod bench;
 mod bench_drape;
 mod bench_fit;
@@ -54,6 +55,9 @@ pub enum Command {
     /// Draw meshes into a PNG or GIF: named views or three projections, coloured by strain,
     /// distance to the body or contact; a drape's frames as an animation.
     Render(render::RenderArgs),
+    /// Batches: a plan's garments x bodies x fabrics x sizes, here or on a scheduler.
+    #[command(subcommand)]
+    Batch(batch::BatchCommand),
     /// Benchmarks (speed against a baseline in the same run).
     #[command(subcommand)]
     Bench(bench::BenchCommand),
@@ -111,6 +115,7 @@ pub fn main() -> ExitCode {
         Command::Drape(a) => drape::run(a),
         Command::Garment(a) => garment::run(a),
         Command::Render(a) => render::run(a),
+        Command::Batch(b) => batch::run(b, cli.jobs),
         Command::Bench(b) => bench::run(b),
     };
     match result {
