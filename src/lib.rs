@@ -15,6 +15,7 @@ pub mod io;
 pub mod math;
 pub mod mesh;
 pub mod par;
+pub mod plot;
 pub mod render;
 pub mod scene;
 pub mod sim;

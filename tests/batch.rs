@@ -308,7 +308,7 @@ fn collect_table_columns_and_values() {
         let (x0, y0) = ((cell % 4) * 240, (cell / 4) * 180);
         let cloth = (y0..y0 + 180)
             .flat_map(|y| (x0..x0 + 240).map(move |x| (y * 960 + x) * 3))
-            .filter(|&i| buf[i] > buf[i + 2] + 40)
+            .filter(|&i| u16::from(buf[i]) > u16::from(buf[i + 2]) + 40)
             .count();
         assert!(cloth > 240 * 180 / 10, "cell {cell}: {cloth} cloth pixels");
     }

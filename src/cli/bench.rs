@@ -39,6 +39,10 @@ pub struct FitBench {
     /// Timed repetitions of each measurement (the median is reported).
     #[arg(long, default_value_t = 9, value_parser = clap::value_parser!(u32).range(1..))]
     pub runs: u32,
+    /// Also draw the error against the node intervals (log-log, a line per Lanczos order) as
+    /// an SVG file.
+    #[arg(long, value_name = "FILE.svg")]
+    pub plot: Option<std::path::PathBuf>,
     /// Print the results as JSON.
     #[arg(long)]
     pub json: bool,

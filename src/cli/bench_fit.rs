@@ -102,6 +102,34 @@ struct Report {
     runs: u32,
 }
 
+/// Draws the error against the node intervals, a line per correction.
+fn write_plot(path: &std::path::Path, rows: &[Row]) -> anyhow::Result<()> {
+    use crate::plot::{Plot, Series};
+    let line = |name: &str, e: &dyn Fn(&Row) -> f64| {
+        Series::new(
+            name,
+            rows.iter().map(|r| (r.intervals as f64, e(r))).collect(),
+        )
+    };
+    let plot = Plot {
+        title: "bench fit: largest error against nodes along (analytic surface)".into(),
+        x_label: "node intervals along (K - 1)".into(),
+        y_label: "largest error".into(),
+        log_x: true,
+        log_y: true,
+        series: vec![
+            line("no correction", &|r| r.error_none),
+            line("Lanczos m = 0", &|r| r.error[0]),
+            line("Lanczos m = 1", &|r| r.error[1]),
+            line("Lanczos m = 2", &|r| r.error[2]),
+        ],
+        ..Plot::default()
+    };
+    let svg = plot.svg();
+    crate::io::write_atomic(path, &[], |w| std::io::Write::write_all(w, svg.as_bytes()))?;
+    Ok(())
+}
+
 /// Runs the benchmark.
 pub fn run(a: FitBench) -> anyhow::Result<()> {
     let intervals = [8usize, 16, 32, 64, 128, 256];
@@ -152,6 +180,9 @@ pub fn run(a: FitBench) -> anyhow::Result<()> {
     };
     let order = [0, 1, 2].map(|m| order_of(rows.iter().map(|r| r.error[m]).collect()));
     let order_none = order_of(rows.iter().map(|r| r.error_none).collect());
+    if let Some(path) = &a.plot {
+        write_plot(path, &rows)?;
+    }
     if !a.json {
         println!(
             "  measured order: none {:.2}, m=0 {:.2}, m=1 {:.2}, m=2 {:.2} (theory: N^-(2m+1) or better: 1, 3, 5)",
