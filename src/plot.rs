@@ -53,7 +53,7 @@ pub struct Plot {
     pub log_x: bool,
     pub log_y: bool,
     pub series: Vec<Series>,
-    /// Picture size, px (default 680 x 440).
+    /// Picture size, px (default 720 x 440).
     pub size: (f64, f64),
 }
 
@@ -66,13 +66,13 @@ impl Default for Plot {
             log_x: false,
             log_y: false,
             series: Vec::new(),
-            size: (680.0, 440.0),
+            size: (720.0, 440.0),
         }
     }
 }
 
 /// Margins: left, right (the legend), top, bottom, px.
-const MARGIN: (f64, f64, f64, f64) = (80.0, 170.0, 40.0, 55.0);
+const MARGIN: (f64, f64, f64, f64) = (80.0, 200.0, 40.0, 55.0);
 /// Line colours, in order (Okabe-Ito: told apart with colour-blindness too).
 const COLOURS: [&str; 7] = [
     "#0072b2", "#d55e00", "#009e73", "#cc79a7", "#e69f00", "#56b4e9", "#000000",
@@ -241,13 +241,19 @@ impl Plot {
 
     fn series_svg(&self, s: &mut String, k: usize, ax: &Axis, ay: &Axis) {
         let colour = COLOURS[k % COLOURS.len()];
+        // Past the colours, the lines are dashed.
+        let dash = if k >= COLOURS.len() {
+            r#" stroke-dasharray="6,3""#
+        } else {
+            ""
+        };
         let mut run: Vec<(f64, f64)> = Vec::new();
         let flush = |run: &mut Vec<(f64, f64)>, s: &mut String| {
             if run.len() > 1 {
                 let pts: Vec<String> = run.iter().map(|(x, y)| format!("{x:.2},{y:.2}")).collect();
                 let _ = write!(
                     s,
-                    r#"<polyline points="{}" fill="none" stroke="{colour}" stroke-width="2"/>"#,
+                    r#"<polyline points="{}" fill="none" stroke="{colour}" stroke-width="2"{dash}/>"#,
                     pts.join(" ")
                 );
             }
@@ -273,7 +279,7 @@ impl Plot {
         let x = l + w + 14.0;
         let _ = write!(
             s,
-            r#"<line x1="{x}" y1="{y}" x2="{}" y2="{y}" stroke="{colour}" stroke-width="2"/><text x="{}" y="{}">{}</text>"#,
+            r#"<line x1="{x}" y1="{y}" x2="{}" y2="{y}" stroke="{colour}" stroke-width="2"{dash}/><text x="{}" y="{}">{}</text>"#,
             x + 24.0,
             x + 30.0,
             y + 4.0,

@@ -48,6 +48,11 @@ pub struct DrapeBench {
     /// Skip the slowest grid (1 x 1 x 1): every particle in the torso's box tests every face.
     #[arg(long)]
     pub skip_one_cell: bool,
+    /// Also draw the measurements as SVG into this folder: `grid_cells.svg` (collision and
+    /// total time against the number of cells, ours and the paper's) and `integrators.svg`
+    /// (error against wall time per integrator: the Pareto of the step).
+    #[arg(long, value_name = "DIR")]
+    pub plot: Option<PathBuf>,
     /// Print the results as JSON.
     #[arg(long)]
     pub json: bool,
@@ -201,6 +206,8 @@ struct Row {
 
 #[derive(Debug, Serialize)]
 struct IntegratorRow {
+    /// The configuration (integrator and its iterations).
+    label: String,
     integrator: Integrator,
     dt: f64,
     error: Option<f64>,
@@ -218,6 +225,64 @@ struct Report {
     threads_identical: bool,
     torso: TorsoRow,
     integrators: Vec<IntegratorRow>,
+}
+
+/// Draws the grid-cell curve and the integrators' Pareto into `dir`.
+fn write_plots(dir: &std::path::Path, rows: &[Row], ints: &[IntegratorRow]) -> anyhow::Result<()> {
+    use crate::plot::{Plot, Series};
+    std::fs::create_dir_all(dir)?;
+    let cells = |r: &Row| r.cells.iter().product::<usize>() as f64;
+    // The paper's grids as lines; the `auto` rule's grid (no paper figure) as its own points.
+    let line = |name: &str, auto: bool, f: &dyn Fn(&Row) -> Option<f64>| {
+        let of = rows
+            .iter()
+            .filter(|r| r.paper_total_seconds.is_none() == auto);
+        Series::new(name, of.filter_map(|r| Some((cells(r), f(r)?))).collect())
+    };
+    let grid = Plot {
+        title: "bench drape: time against the collision grid's cells".into(),
+        x_label: "cells".into(),
+        y_label: "seconds".into(),
+        log_x: true,
+        log_y: true,
+        series: vec![
+            line("collision", false, &|r| Some(r.collision_seconds)),
+            line("total", false, &|r| Some(r.total_seconds)),
+            line("paper: collision", false, &|r| r.paper_collision_seconds),
+            line("paper: total", false, &|r| r.paper_total_seconds),
+            line("auto rule: collision", true, &|r| Some(r.collision_seconds)),
+            line("auto rule: total", true, &|r| Some(r.total_seconds)),
+        ],
+        ..Plot::default()
+    };
+    let mut names: Vec<&str> = Vec::new();
+    for r in ints {
+        if !names.contains(&r.label.as_str()) {
+            names.push(&r.label);
+        }
+    }
+    let pareto = Plot {
+        title: "bench drape: error against wall time (each point a step)".into(),
+        x_label: "wall seconds".into(),
+        y_label: "error against the reference, m".into(),
+        log_x: true,
+        log_y: true,
+        series: (names.iter())
+            .map(|n| {
+                let pts = (ints.iter().filter(|r| r.label == *n))
+                    .filter_map(|r| Some((r.wall_seconds, r.error?)));
+                Series::new(*n, pts.collect())
+            })
+            .collect(),
+        ..Plot::default()
+    };
+    for (name, plot) in [("grid_cells.svg", grid), ("integrators.svg", pareto)] {
+        let svg = plot.svg();
+        crate::io::write_atomic(&dir.join(name), &[], |w| {
+            std::io::Write::write_all(w, svg.as_bytes())
+        })?;
+    }
+    Ok(())
 }
 
 /// Runs the benchmark.
@@ -327,6 +392,9 @@ pub fn run(a: DrapeBench) -> anyhow::Result<()> {
         a.steps
     ));
     let integrators = integrator_table(&a, &say)?;
+    if let Some(dir) = &a.plot {
+        write_plots(dir, &rows, &integrators)?;
+    }
     if a.json {
         let rep = Report {
             particles: probe.model.len(),
@@ -454,6 +522,7 @@ fn integrator_table(a: &DrapeBench, say: &dyn Fn(String)) -> anyhow::Result<Vec<
                 }
             ));
             rows.push(IntegratorRow {
+                label: label.clone(),
                 integrator,
                 dt,
                 error,
