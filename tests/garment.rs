@@ -364,6 +364,9 @@ fn the_garment_command_reports_a_tube_on_a_cylinder() {
             (&0.into(), &0.into()),
             "{r}"
         );
+        // Each panel carries its strain colours (the body none).
+        let t = &tools.trimesh(&[&out.join("tube.glb")])[0];
+        assert_eq!(t["colored"], 2, "{t}");
     }
 }
 

@@ -341,20 +341,15 @@ fn gltf_scene(
             .unwrap_or_else(|_| vec![0.0; m.positions.len()])
     };
     let end = piece_meshes(world);
-    let top = (end.iter().enumerate())
-        .flat_map(|(i, m)| strain(i, m))
-        .fold(1e-3, |a: f64, s| a.max(s.abs()));
+    let top =
+        crate::render::strain::strain_top((end.iter().enumerate()).flat_map(|(i, m)| strain(i, m)));
     let pieces = |meshes: Vec<TriMesh>| -> Vec<Part> {
         let named = sc.pieces.iter().zip(meshes).enumerate();
         named
             .map(|(i, (p, m))| {
-                let values = strain(i, &m);
-                let colours = values.iter().map(|s| {
-                    let [r, g, b] = crate::render::colormap::viridis(s.abs() / top);
-                    [r as f32 / 255.0, g as f32 / 255.0, b as f32 / 255.0, 1.0]
-                });
+                let colours = crate::render::strain::strain_colours(&strain(i, &m), top);
                 let mut part = Part::new(&p.name, to_gltf(m), Surface::Cloth);
-                part.colors = Some(colours.collect());
+                part.colors = Some(colours);
                 part
             })
             .collect()

@@ -257,22 +257,26 @@ fn check_panel_names(pattern: &crate::garment::spec::Pattern, path: &Path) -> an
 }
 
 /// Each panel alone (its vertices renumbered), with its name.
-fn panel_meshes(mesh: &TriMesh, groups: &[(String, usize, usize)]) -> Vec<(String, TriMesh)> {
+fn panel_meshes(
+    mesh: &TriMesh,
+    groups: &[(String, usize, usize)],
+) -> Vec<(String, TriMesh, Vec<u32>)> {
     let mut panels = Vec::new();
     for (name, first, count) in groups {
         let mut index = vec![u32::MAX; mesh.positions.len()];
-        let mut positions = Vec::new();
+        let (mut positions, mut of) = (Vec::new(), Vec::new());
         let mut faces = Vec::with_capacity(*count);
         for f in &mesh.faces[*first..first + count] {
             faces.push(f.map(|v| {
                 if index[v as usize] == u32::MAX {
                     index[v as usize] = positions.len() as u32;
                     positions.push(mesh.positions[v as usize]);
+                    of.push(v);
                 }
                 index[v as usize]
             }));
         }
-        panels.push((name.clone(), TriMesh::new(positions, faces)));
+        panels.push((name.clone(), TriMesh::new(positions, faces), of));
     }
     panels
 }
@@ -286,7 +290,7 @@ fn write_panels(
 ) -> anyhow::Result<Vec<String>> {
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     let mut files = Vec::new();
-    for (name, panel) in panel_meshes(mesh, groups) {
+    for (name, panel, _) in panel_meshes(mesh, groups) {
         let path = dir.join(format!("{name}.obj"));
         io::write_mesh(&path, &panel, &io::WriteOptions::default(), inputs)?;
         files.push(path.display().to_string());
@@ -294,18 +298,28 @@ fn write_panels(
     Ok(files)
 }
 
-/// Writes the glTF file: each panel as cloth and the body as placed, as the OBJ files have them.
+/// Writes the glTF file: each panel as cloth coloured by its strain against the flat pattern
+/// `rest` (one scale for the garment), and the body as placed, as the OBJ files have them.
 fn write_glb(
     path: &Path,
     mesh: &TriMesh,
+    rest: &[crate::math::Point2],
     groups: &[(String, usize, usize)],
     body: (&str, &TriMesh),
     inputs: &[&Path],
 ) -> anyhow::Result<()> {
     use crate::io::gltf::{Part, Scene, Surface};
+    use crate::render::strain::{strain_colours, strain_top, vertex_strain};
+    let rest: Vec<[f64; 2]> = rest.iter().map(|q| [q.x, q.y]).collect();
+    let strain = vertex_strain(mesh, &rest).unwrap_or_else(|_| vec![0.0; mesh.positions.len()]);
+    let top = strain_top(strain.iter().copied());
     let mut parts = vec![Part::new(body.0, body.1.clone(), Surface::Solid)];
-    let panels = panel_meshes(mesh, groups).into_iter();
-    parts.extend(panels.map(|(name, m)| Part::new(name, m, Surface::Cloth)));
+    for (name, m, of) in panel_meshes(mesh, groups) {
+        let values: Vec<f64> = of.iter().map(|&v| strain[v as usize]).collect();
+        let mut part = Part::new(name, m, Surface::Cloth);
+        part.colors = Some(strain_colours(&values, top));
+        parts.push(part);
+    }
     let scene = Scene {
         parts,
         frames: Vec::new(),
@@ -455,7 +469,15 @@ pub fn run(args: GarmentArgs) -> anyhow::Result<()> {
         .collect();
     if args.glb {
         let path = args.output.join(format!("{name}.glb"));
-        write_glb(&path, &mesh, &groups, (&body_name, &body_mesh), &inputs)?;
+        let rest = &g.world.model.rest;
+        write_glb(
+            &path,
+            &mesh,
+            rest,
+            &groups,
+            (&body_name, &body_mesh),
+            &inputs,
+        )?;
         files.push(path.display().to_string());
     }
     if args.preview {

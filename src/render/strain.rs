@@ -88,3 +88,24 @@ fn edge_strain(x: &[Point3], rest: &[[f64; 2]], a: u32, b: u32) -> Result<f64, S
     }
     Ok((x[a as usize] - x[b as usize]).norm() / rest_len - 1.0)
 }
+
+/// Strain values as glTF vertex colours: viridis of `|strain| / top` (clamped), opaque.
+pub fn strain_colours(values: &[f64], top: f64) -> Vec<[f32; 4]> {
+    values
+        .iter()
+        .map(|s| {
+            let [r, g, b] = super::colormap::viridis((s.abs() / top).min(1.0));
+            [
+                f32::from(r) / 255.0,
+                f32::from(g) / 255.0,
+                f32::from(b) / 255.0,
+                1.0,
+            ]
+        })
+        .collect()
+}
+
+/// The top of a strain colour scale: the largest `|strain|`, at least 0.1%.
+pub fn strain_top(values: impl Iterator<Item = f64>) -> f64 {
+    values.fold(1e-3, |a, s| a.max(s.abs()))
+}
