@@ -297,18 +297,14 @@ fn collect_table_columns_and_values() {
     );
     // The contact sheet: 8 cells of 240 x 180, four to a row, each with its cloth drawn (the
     // terracotta covers a good part of every cell).
-    let png = png::Decoder::new(std::io::BufReader::new(
-        std::fs::File::open(out.join("contact_sheet.png")).unwrap(),
-    ));
-    let mut reader = png.read_info().unwrap();
-    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
-    let info = reader.next_frame(&mut buf).unwrap();
-    assert_eq!((info.width, info.height), (960, 360));
+    let (w, h, px) = common::read_png(&out.join("contact_sheet.png"));
+    assert_eq!((w, h), (960, 360));
     for cell in 0..8 {
         let (x0, y0) = ((cell % 4) * 240, (cell / 4) * 180);
+        let px = &px;
         let cloth = (y0..y0 + 180)
-            .flat_map(|y| (x0..x0 + 240).map(move |x| (y * 960 + x) * 3))
-            .filter(|&i| u16::from(buf[i]) > u16::from(buf[i + 2]) + 40)
+            .flat_map(|y| (x0..x0 + 240).map(move |x| px[y * 960 + x]))
+            .filter(|c| u16::from(c[0]) > u16::from(c[2]) + 40)
             .count();
         assert!(cloth > 240 * 180 / 10, "cell {cell}: {cloth} cloth pixels");
     }

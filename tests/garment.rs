@@ -298,14 +298,8 @@ fn the_garment_command_reports_a_tube_on_a_cylinder() {
     let worst = strain.iter().fold(0f64, |m, s| m.max(s.abs()));
     assert!(worst > 0.0 && worst < 0.3, "{worst}");
     // The preview: the garment (terracotta) on the body (grey).
-    let png = png::Decoder::new(std::io::BufReader::new(
-        std::fs::File::open(out.join("tube.png")).unwrap(),
-    ));
-    let mut reader = png.read_info().unwrap();
-    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
-    let info = reader.next_frame(&mut buf).unwrap();
-    assert_eq!((info.width, info.height), (640, 480));
-    let px: Vec<&[u8]> = buf.chunks(3).collect();
+    let (w, h, px) = common::read_png(&out.join("tube.png"));
+    assert_eq!((w, h), (640, 480));
     assert!(
         px.iter()
             .filter(|c| u16::from(c[0]) > u16::from(c[1]) + 40 && c[1] > c[2])

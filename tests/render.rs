@@ -35,18 +35,11 @@ struct Picture {
 
 impl Picture {
     fn read(path: &Path) -> Picture {
-        let dec = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
-        let mut reader = dec.read_info().unwrap();
-        let mut buf = vec![0; reader.output_buffer_size().unwrap()];
-        let info = reader.next_frame(&mut buf).unwrap();
-        assert_eq!(info.color_type, png::ColorType::Rgb);
+        let (width, height, pixels) = common::read_png(path);
         Picture {
-            width: info.width as usize,
-            height: info.height as usize,
-            pixels: buf[..info.buffer_size()]
-                .chunks(3)
-                .map(|c| [c[0], c[1], c[2]])
-                .collect(),
+            width,
+            height,
+            pixels,
         }
     }
 

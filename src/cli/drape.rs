@@ -403,14 +403,8 @@ fn stage_preview(
     let pieces: Vec<TriMesh> = (0..world.model.pieces.len())
         .map(|i| piece_mesh(world, i, to_units))
         .collect();
-    let objects: Vec<TriMesh> = world
-        .colliders
-        .iter()
-        .map(|c| {
-            let mut m = c.mesh.clone();
-            crate::mesh::transform::scale(&mut m, to_units);
-            m
-        })
+    let objects: Vec<TriMesh> = (0..world.colliders.len())
+        .map(|i| object_mesh(world, i, to_units))
         .collect();
     use crate::render::{default_lift, Item};
     let lift = default_lift(pieces.iter().chain(&objects).flat_map(|m| &m.positions));

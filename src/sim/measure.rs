@@ -61,7 +61,8 @@ pub fn placement_warnings(world: &World) -> Vec<String> {
     let across = cloth.diagonal();
     let short = crate::math::short;
     let mut out = Vec::new();
-    for c in &world.colliders {
+    let inside = particles_inside(world);
+    for (c, n) in world.colliders.iter().zip(inside) {
         let Some(b) = crate::math::Aabb::of_points(&c.mesh.positions) else {
             continue;
         };
@@ -72,14 +73,11 @@ pub fn placement_warnings(world: &World) -> Vec<String> {
                 c.name, short(ratio), short(b.diagonal()), short(across)
             ));
         }
-        if c.closed {
-            let n = world.state.x.par_iter().filter(|p| inside(c, p)).count();
-            if n > 0 {
-                out.push(format!(
-                    "{n} of {} particles start inside object '{}': no collision can push them out (they are behind its faces); move the piece or check the object's scale and placement",
-                    world.state.x.len(), c.name
-                ));
-            }
+        if let Some(n @ 1..) = n {
+            out.push(format!(
+                "{n} of {} particles start inside object '{}': no collision can push them out (they are behind its faces); move the piece or check the object's scale and placement",
+                world.state.x.len(), c.name
+            ));
         }
     }
     out
