@@ -14,6 +14,9 @@
 //! iterations = 10                  # projective dynamics: local/global iterations per step
 //! anderson = 5                     # projective dynamics: Anderson acceleration's history (0: off)
 //! strain_band = 0.01               # projective dynamics: springs free within 1% of rest length
+//! strain_tolerance = 0.01          # projective dynamics: iterate on while a spring is over 1%
+//! max_iterations = 20              # projective dynamics: ... up to this many in all
+//! corrections = 1                  # projective dynamics: contact correction rounds (0: none)
 //! chebyshev = 0.9                  # projective dynamics, with anderson = 0: Chebyshev's rho
 //! steps = 10000                    # or duration = 1.0 (s), or until_rest = 1e-6 (J, kinetic)
 //! max_steps = 1000000              # with until_rest: give up after this many
@@ -140,6 +143,10 @@ struct File {
     report: Option<ReportFile>,
 }
 
+/// The most rounds of contact corrections a scene may ask for (each costs a collision pass
+/// and an iteration; two already leave no measurable sink).
+pub const MAX_CORRECTIONS: u32 = 10;
+
 /// The longest history of Anderson acceleration a scene may ask for (each vector is the
 /// size of the cloth; more than a few stop paying).
 pub const MAX_ANDERSON: u32 = 20;
@@ -156,6 +163,9 @@ struct SolverFile {
     chebyshev: Option<f64>,
     anderson: Option<u32>,
     strain_band: Option<f64>,
+    strain_tolerance: Option<f64>,
+    max_iterations: Option<u32>,
+    corrections: Option<u32>,
     steps: Option<u64>,
     duration: Option<f64>,
     until_rest: Option<f64>,
@@ -533,6 +543,31 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
             );
         }
     }
+    if let Some(t) = f.solver.strain_tolerance {
+        if t.is_finite() && t > 0.0 && t < 1.0 {
+            solver.strain_tolerance = Some(t);
+        } else {
+            bad(
+                "solver.strain_tolerance",
+                format!("must be a strain in (0, 1), got {}", short(t)),
+            );
+        }
+    }
+    count(
+        "solver.max_iterations",
+        f.solver.max_iterations,
+        &mut solver.max_iterations,
+    );
+    if let Some(c) = f.solver.corrections {
+        if c <= MAX_CORRECTIONS {
+            solver.corrections = c;
+        } else {
+            bad(
+                "solver.corrections",
+                format!("must be 0 (none) to {MAX_CORRECTIONS} rounds, got {c}"),
+            );
+        }
+    }
     if let Some(m) = f.solver.anderson {
         if m <= MAX_ANDERSON {
             solver.anderson = m;
@@ -571,7 +606,10 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
             f.solver.iterations.is_some()
                 || f.solver.chebyshev.is_some()
                 || f.solver.anderson.is_some()
-                || f.solver.strain_band.is_some(),
+                || f.solver.strain_band.is_some()
+                || f.solver.strain_tolerance.is_some()
+                || f.solver.max_iterations.is_some()
+                || f.solver.corrections.is_some(),
             Integrator::ProjectiveDynamics,
         ),
     ];

@@ -967,6 +967,16 @@ fn bad_scenes_are_refused_naming_the_file_and_the_key() {
         &["solver.strain_band", "[0, 1), got -0.1"],
     );
     refused(
+        "strain_tolerance_out_of_range",
+        &GOOD.replace("steps = 10", "steps = 10\nstrain_tolerance = 0"),
+        &["solver.strain_tolerance", "(0, 1), got 0"],
+    );
+    refused(
+        "too_many_corrections",
+        &GOOD.replace("steps = 10", "steps = 10\ncorrections = 11"),
+        &["solver.corrections", "0 (none) to 10 rounds, got 11"],
+    );
+    refused(
         "anderson_too_deep",
         &GOOD.replace("steps = 10", "steps = 10\nanderson = 1000"),
         &["solver.anderson", "0 (off) to 20", "got 1000"],

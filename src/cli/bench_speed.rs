@@ -45,6 +45,16 @@ pub struct SpeedBench {
     /// Projective dynamics: iterations per step.
     #[arg(long)]
     pub iterations: Option<u32>,
+    /// Projective dynamics: go on iterating past `--iterations` while a stretch spring is
+    /// strained more than this (0.01 is 1%; 0 turns it off).
+    #[arg(long, value_name = "STRAIN")]
+    pub strain_tolerance: Option<f64>,
+    /// Projective dynamics: the most iterations a step takes with the strain tolerance.
+    #[arg(long, value_name = "N")]
+    pub max_iterations: Option<u32>,
+    /// Projective dynamics: rounds of contact corrections after the iterations (0: none).
+    #[arg(long, value_name = "N")]
+    pub corrections: Option<u32>,
     /// Projective dynamics: Anderson acceleration's history (0: off).
     #[arg(long)]
     pub anderson: Option<u32>,
@@ -85,6 +95,8 @@ struct Row {
     factor_seconds: f64,
     factorisations: u64,
     low_rank_columns: u64,
+    /// Projective dynamics: local/global iterations per step, on average.
+    iterations_per_step: f64,
     inside: usize,
     max_strain: f64,
     /// The largest strain over the second half of the run.
@@ -182,6 +194,15 @@ fn settings(a: &SpeedBench) -> SolverSettings {
     if let Some(m) = a.anderson {
         s.anderson = m;
     }
+    if let Some(t) = a.strain_tolerance {
+        s.strain_tolerance = (t > 0.0).then_some(t);
+    }
+    if let Some(c) = a.corrections {
+        s.corrections = c;
+    }
+    if let Some(m) = a.max_iterations {
+        s.max_iterations = m;
+    }
     if let Some(k) = a.low_rank_max {
         s.low_rank_max = k;
     }
@@ -221,7 +242,7 @@ pub fn run(a: SpeedBench) -> anyhow::Result<()> {
             String::new()
         }
     ));
-    say("  particles  faces    wall s   solve s  collide s  factor s (count, low-rank columns) | inside  max strain  2nd half max  min clearance mm".into());
+    say("  particles  faces    wall s   solve s  collide s  factor s (count, low-rank columns) it/step | inside  max strain  2nd half max  min clearance mm".into());
     let mut rows = Vec::new();
     let mut faces_list = vec![5120];
     if !a.small_sphere_only {
@@ -270,13 +291,14 @@ pub fn run(a: SpeedBench) -> anyhow::Result<()> {
                 factor_seconds: st.solver.factor_seconds,
                 factorisations: st.solver.factorisations,
                 low_rank_columns: st.solver.low_rank_columns,
+                iterations_per_step: st.solver.pd_iterations as f64 / st.steps.max(1) as f64,
                 inside,
                 max_strain,
                 settled_strain: settled,
                 min_clearance: clearance,
             };
             say(format!(
-                "  {:>9}  {:>6}  {:>8.3}  {:>8.3}  {:>9.3}  {:>8.3} ({:>5}, {:>6}) | {:>6}  {:>10.2e}  {:>13.2e}  {:>8.3}",
+                "  {:>9}  {:>6}  {:>8.3}  {:>8.3}  {:>9.3}  {:>8.3} ({:>5}, {:>6}) {:>7.2} | {:>6}  {:>10.2e}  {:>13.2e}  {:>8.3}",
                 row.particles,
                 row.faces,
                 row.wall_seconds,
@@ -285,6 +307,7 @@ pub fn run(a: SpeedBench) -> anyhow::Result<()> {
                 row.factor_seconds,
                 row.factorisations,
                 row.low_rank_columns,
+                row.iterations_per_step,
                 row.inside,
                 row.max_strain,
                 row.settled_strain,

@@ -84,16 +84,24 @@ impl Spring {
     /// inside the band). A zero `d` keeps its direction undefined: it projects to zero.
     #[inline]
     pub fn project(&self, xa: &Point3, xb: &Point3, limit: Option<f64>) -> Vec3 {
+        self.project_measured(xa, xb, limit).0
+    }
+
+    /// [`Spring::project`] and the spring's strain `|x_b - x_a| / rest - 1` at the same time
+    /// (one length for both: the adaptive iterations of projective dynamics read the strain).
+    #[inline]
+    pub fn project_measured(&self, xa: &Point3, xb: &Point3, limit: Option<f64>) -> (Vec3, f64) {
         let d = xb - xa;
         let len = d.norm();
+        let strain = len / self.rest - 1.0;
         if len == 0.0 {
-            return Vec3::zeros();
+            return (Vec3::zeros(), strain);
         }
         let target = match limit {
             None => self.rest,
             Some(s) => len.clamp(self.rest * (1.0 - s), self.rest * (1.0 + s)),
         };
-        d * (target / len)
+        (d * (target / len), strain)
     }
 }
 

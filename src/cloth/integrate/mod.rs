@@ -186,6 +186,18 @@ pub struct SolverSettings {
     pub cg_max_iterations: u32,
     /// Projective dynamics: local/global iterations per step (default 5).
     pub iterations: u32,
+    /// Projective dynamics: after `iterations`, go on iterating while the largest strain of a
+    /// stretch spring exceeds this (a fraction: 0.01 is 1%), up to `max_iterations` in all;
+    /// `None`: exactly `iterations` per step.
+    pub strain_tolerance: Option<f64>,
+    /// Projective dynamics: the most iterations a step takes with `strain_tolerance`.
+    pub max_iterations: u32,
+    /// Projective dynamics: after the iterations, at most this many rounds of contact
+    /// corrections, each followed by the iterations again: particles whose solved path meets
+    /// a face the step did not foresee get a contact, and particles left sunk behind their
+    /// face more than half the thickness get a stiffer one (default
+    /// [`projective::CORRECTIONS`]; 0: none, the collide phase alone puts them back).
+    pub corrections: u32,
     /// Projective dynamics: Chebyshev acceleration (Wang 2015) with this spectral radius
     /// estimate in (0, 1); `None` (default): plain iterations. Ignored with `anderson`.
     pub chebyshev: Option<f64>,
@@ -223,6 +235,9 @@ impl SolverSettings {
             cg_tolerance: 1e-6,
             cg_max_iterations: 1000,
             iterations: 5,
+            strain_tolerance: None,
+            max_iterations: 20,
+            corrections: projective::CORRECTIONS,
             chebyshev: None,
             strain_band: None,
             anderson: ANDERSON_DEPTH,
