@@ -1306,6 +1306,7 @@ fn a_frame_callback_that_reports_rest_ends_the_run_there() {
             Ok(step >= 4)
         },
         &|_| {},
+        Default::default(),
     )
     .unwrap();
     assert_eq!(seen, vec![2, 4]);

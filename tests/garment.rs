@@ -86,7 +86,7 @@ fn a_tube_sewn_round_a_cylinder_closes_and_is_round() {
     let clearance = 0.125 * settings.assemble.spacing;
     let body = cylinder(r_body, 0.5, 1.5, 48);
     let (mut world, seams, seam_k) = garment_world(&pattern, body, &settings).unwrap();
-    let report = sew(&mut world, &seams, &settings, &|_| {}).unwrap();
+    let report = sew(&mut world, &seams, &settings, &|_| {}, None).unwrap();
     assert!(report.done, "seams closed: {report:?}");
     assert!(report.seam_gap_max <= 1e-3);
     drapekit::garment::drape::set_seam_k(&mut world.model, seam_k);
@@ -145,7 +145,7 @@ fn a_seam_across_a_bar_is_sewn_over_it_not_through_it() {
     let (mut world, seams, _) = garment_world(&pattern, bar, &settings).unwrap();
     let x = &world.state.x;
     assert!(seams.iter().all(|s| (x[s.a as usize].z - 1.2).abs() < 1e-9));
-    let report = sew(&mut world, &seams, &settings, &|_| {}).unwrap();
+    let report = sew(&mut world, &seams, &settings, &|_| {}, None).unwrap();
     assert!(report.done, "seams closed: {report:?}");
     let x = &world.state.x;
     for s in &seams {
@@ -184,8 +184,12 @@ fn a_drape_at_rest_reports_the_rest_it_measured() {
     // (a pendulum of about 30 cm) takes 11 s to fall under the rest test's 0.3 mm a frame.
     settings.settle_max = 20.0;
     let (mut world, seams, seam_k) = garment_world(&pattern, shoulder_bar().0, &settings).unwrap();
-    assert!(sew(&mut world, &seams, &settings, &|_| {}).unwrap().done);
-    let d = settle(&mut world, &seams, seam_k, &settings).unwrap();
+    assert!(
+        sew(&mut world, &seams, &settings, &|_| {}, None)
+            .unwrap()
+            .done
+    );
+    let d = settle(&mut world, &seams, seam_k, &settings, None).unwrap();
     assert!(d.done, "at rest within settle_max: {d:?}");
     let moving = d.moving_fraction.expect("measured");
     assert!(moving <= REST_FRACTION, "{d:?}");
@@ -208,7 +212,7 @@ fn sewing_gives_the_same_bits_with_one_or_two_threads() {
             .unwrap();
         pool.install(|| {
             let (mut world, seams, _) = garment_world(&pattern, bar, &settings).unwrap();
-            sew(&mut world, &seams, &settings, &|_| {}).unwrap();
+            sew(&mut world, &seams, &settings, &|_| {}, None).unwrap();
             let candidates = world.self_contact.as_ref().unwrap().totals.candidates;
             (world.state.x, candidates)
         })

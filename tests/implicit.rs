@@ -270,6 +270,7 @@ fn worst_strain_after(w: &mut World, settings: &SolverSettings, from: u64, steps
         Some(1),
         &mut record,
         &|_| {},
+        Default::default(),
     )
     .unwrap();
     assert!(w.state.contact.iter().filter(|c| c.is_some()).count() > 100);

@@ -228,6 +228,7 @@ fn late_peak(settings: &SolverSettings) -> anyhow::Result<f64> {
             Ok(false)
         },
         &|_| {},
+        Default::default(),
     )?;
     Ok(peak.get())
 }

@@ -270,7 +270,15 @@ pub fn run(a: SpeedBench) -> anyhow::Result<()> {
                     Ok(false)
                 };
                 let st = if run + 1 == a.runs {
-                    sim::run(&mut w, &s, stop, Some(1), &mut record, &|_| {})?
+                    sim::run(
+                        &mut w,
+                        &s,
+                        stop,
+                        Some(1),
+                        &mut record,
+                        &|_| {},
+                        Default::default(),
+                    )?
                 } else {
                     sim::run_quiet(&mut w, &s, stop)?
                 };

@@ -33,6 +33,10 @@ pub struct DrapeArgs {
     /// above.
     #[arg(long)]
     pub preview: bool,
+    /// Continue the run that Ctrl-C or SIGTERM interrupted, from its checkpoint
+    /// (`OUT_DIR/<scene>.checkpoint`), to the outputs of a run never stopped.
+    #[arg(long)]
+    pub resume: bool,
 }
 
 /// One object in the report.
@@ -239,8 +243,13 @@ fn stage_pieces(
 }
 
 fn piece_mesh(world: &World, piece: usize, to_units: f64) -> TriMesh {
+    piece_mesh_at(world, &world.state.x, piece, to_units)
+}
+
+/// A piece's mesh with the cloth at `x`.
+fn piece_mesh_at(world: &World, x: &[crate::math::Point3], piece: usize, to_units: f64) -> TriMesh {
     let r = &world.model.pieces[piece];
-    let positions = world.state.x[r.first..r.first + r.count]
+    let positions = x[r.first..r.first + r.count]
         .iter()
         .map(|p| p * to_units)
         .collect();
@@ -308,10 +317,10 @@ fn to_gltf(mut mesh: TriMesh) -> TriMesh {
     mesh
 }
 
-/// The pieces at one moment, in metres and z up.
-fn piece_meshes(world: &World) -> Vec<TriMesh> {
+/// The pieces with the cloth at `x`, in metres and z up.
+fn piece_meshes(world: &World, x: &[crate::math::Point3]) -> Vec<TriMesh> {
     (0..world.model.pieces.len())
-        .map(|i| piece_mesh(world, i, 1.0))
+        .map(|i| piece_mesh_at(world, x, i, 1.0))
         .collect()
 }
 
@@ -340,7 +349,7 @@ fn gltf_scene(
         crate::render::strain::vertex_strain(m, &rest[i])
             .unwrap_or_else(|_| vec![0.0; m.positions.len()])
     };
-    let end = piece_meshes(world);
+    let end = piece_meshes(world, &world.state.x);
     let top =
         crate::render::strain::strain_top((end.iter().enumerate()).flat_map(|(i, m)| strain(i, m)));
     let pieces = |meshes: Vec<TriMesh>| -> Vec<Part> {
@@ -439,6 +448,10 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
             out.display()
         );
     }
+    super::remove_stale_temps(&[out, &out.join("frames")]);
+    let checkpoint = out.join(format!("{}.checkpoint", scene_stem(&sc)));
+    let fingerprint = sim::checkpoint::fingerprint(&sc, &format!("glb={}", args.glb))?;
+    let mut resume = read_checkpoint(&checkpoint, &fingerprint, args.resume)?;
     // Nothing is created until there is something to write. Every output (frames, pieces) is
     // staged in a temporary file and renamed into place only when the run has succeeded: a failed
     // run leaves an earlier run's files as they were.
@@ -464,11 +477,12 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
     });
     let frames_dir = out.join("frames");
     let names: Vec<String> = sc.pieces.iter().map(|p| p.name.clone()).collect();
-    // The frames kept for the glTF file, in metres and z up.
-    let glb_frames = std::cell::RefCell::new(Vec::<(u64, Vec<TriMesh>)>::new());
+    // The frames kept for the glTF file: the positions, in metres and z up.
+    let kept = resume.as_mut().map(|c| std::mem::take(&mut c.frames));
+    let glb_frames = std::cell::RefCell::new(kept.unwrap_or_default());
     let mut frame = |step: u64, w: &World| -> Result<bool, sim::SimError> {
         if args.glb {
-            glb_frames.borrow_mut().push((step, piece_meshes(w)));
+            glb_frames.borrow_mut().push((step, w.state.x.clone()));
         }
         std::fs::create_dir_all(&frames_dir).map_err(|e| sim::SimError::Frame {
             step,
@@ -496,8 +510,16 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
             b.set_position(step);
         }
     };
+    if let (Some(b), Some(c)) = (&bar, &resume) {
+        b.set_position(c.step);
+    }
+    let signals = super::interrupt::install()?;
+    let control = sim::Control {
+        cancel: Some(signals.cancel()),
+        resume: resume.as_ref(),
+    };
     let stats = sim::run(
-        &mut world, &sc.solver, sc.stop, sc.frames, &mut frame, &progress,
+        &mut world, &sc.solver, sc.stop, sc.frames, &mut frame, &progress, control,
     );
     if let Some(b) = &bar {
         b.finish_and_clear();
@@ -505,19 +527,27 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
     let mut staged = staged.into_inner();
     let stats = match stats {
         Ok(s) => s,
+        Err(sim::SimError::Interrupted(mut c)) => {
+            c.fingerprint = fingerprint;
+            c.frames = glb_frames.take();
+            return Err(keep_checkpoint(
+                *c,
+                staged,
+                &checkpoint,
+                total,
+                &inputs,
+                signals,
+            ));
+        }
         Err(e) => {
             abandon(staged, out, existed);
             return Err(e.into());
         }
     };
     let object_names = object_names(&sc, out);
-    let glb_path = args.glb.then(|| {
-        let stem = sc
-            .path
-            .file_stem()
-            .map_or("scene".into(), |s| s.to_string_lossy());
-        out.join(format!("{stem}.glb"))
-    });
+    let glb_path = args
+        .glb
+        .then(|| out.join(format!("{}.glb", scene_stem(&sc))));
     type Written = (Vec<PieceReport>, Vec<Vec<String>>, Option<String>);
     let written = (|| -> anyhow::Result<Written> {
         let pieces = stage_pieces(&sc, &world, out, &inputs, &mut staged)?;
@@ -528,7 +558,10 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
             .transpose()?;
         if let Some(path) = &glb_path {
             let frames = glb_frames.take();
-            let scene = gltf_scene(&sc, &world, &object_names, frames, stats.steps);
+            let frames = frames
+                .into_iter()
+                .map(|(s, x)| (s, piece_meshes(&world, &x)));
+            let scene = gltf_scene(&sc, &world, &object_names, frames.collect(), stats.steps);
             staged.push(gltf::stage_scene(path, &scene, &inputs)?);
         }
         io::commit(std::mem::take(&mut staged))?;
@@ -541,6 +574,12 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
             return Err(e);
         }
     };
+    if checkpoint.exists() && std::fs::remove_file(&checkpoint).is_ok() {
+        eprintln!(
+            "note: removed {}: the run is complete",
+            checkpoint.display()
+        );
+    }
     let inside = sim::particles_inside(&world);
     let clearance = sim::min_clearance(&world);
     let objects: Vec<ObjectReport> = world
@@ -627,6 +666,72 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
         args.json,
         print_summary,
     )
+}
+
+/// The stem of the scene file: the name of the checkpoint and of the glTF file.
+fn scene_stem(sc: &scene::Scene) -> String {
+    sc.path
+        .file_stem()
+        .map_or("scene".into(), |s| s.to_string_lossy().into_owned())
+}
+
+/// The checkpoint to continue from: with `--resume`, the one at `path`, which must belong to
+/// this scene and these options; without, none (a checkpoint there is said to be left, and is
+/// replaced when this run stops or removed when it completes).
+fn read_checkpoint(
+    path: &Path,
+    now: &sim::checkpoint::Fingerprint,
+    resume: bool,
+) -> anyhow::Result<Option<sim::Checkpoint>> {
+    if !resume {
+        if path.exists() {
+            eprintln!(
+                "note: {} holds an interrupted run; this run starts over (--resume continues it)",
+                path.display()
+            );
+        }
+        return Ok(None);
+    }
+    if !path.exists() {
+        anyhow::bail!(
+            "--resume: there is no checkpoint {} to continue from (a run interrupted by Ctrl-C or SIGTERM writes it there); run without --resume to start",
+            path.display()
+        );
+    }
+    let c = sim::Checkpoint::read(path)?;
+    c.check(now, path)?;
+    Ok(Some(c))
+}
+
+/// After an interrupt: the finished frames put into place, the checkpoint written (atomically)
+/// to `path`; the error that says where it is and how to resume.
+fn keep_checkpoint(
+    c: sim::Checkpoint,
+    staged: Vec<io::Staged>,
+    path: &Path,
+    total: u64,
+    inputs: &[&Path],
+    signals: &super::interrupt::Signals,
+) -> anyhow::Error {
+    let kept = (|| -> anyhow::Result<()> {
+        io::commit(staged)?;
+        if let Some(dir) = path.parent() {
+            std::fs::create_dir_all(dir)?;
+        }
+        c.write(path, inputs)?;
+        Ok(())
+    })();
+    if let Err(e) = kept {
+        return e.context("the run was interrupted, and its checkpoint could not be written");
+    }
+    let message = format!(
+        "after step {} of {total} (t = {} s): its state is in {}; resume with: {}",
+        c.step,
+        crate::math::short(c.time),
+        path.display(),
+        super::interrupt::resume_command()
+    );
+    signals.interrupted(message).into()
 }
 
 /// Particles inside the closed objects, from each object's count (`None` for an open one);

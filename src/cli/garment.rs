@@ -417,7 +417,16 @@ pub fn run(args: GarmentArgs) -> anyhow::Result<()> {
             eprint!("\rsewing: {t:.2} s simulated");
         }
     };
-    let g = gd::sew_and_drape(&pattern, body, &settings, &progress)?;
+    super::remove_stale_temps(&[&args.output, &args.output.join("panels")]);
+    let signals = super::interrupt::install()?;
+    let cancel = Some(signals.cancel());
+    let g = match gd::sew_and_drape(&pattern, body, &settings, &progress, cancel) {
+        Err(gd::GarmentError::Sim(crate::sim::SimError::Interrupted(_))) => {
+            let what = "during the garment run: a garment keeps no checkpoint; nothing was written";
+            return Err(signals.interrupted(what).into());
+        }
+        g => g?,
+    };
     if super::interactive() {
         eprintln!();
     }

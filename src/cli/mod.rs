@@ -1,6 +1,7 @@
 //! The command line: one subcommand per job. Arguments are validated into the library's option
 //! structs before any work starts; errors print their whole chain and exit with status 1 (2 for
-//! usage errors, from clap).
+//! usage errors, from clap; 128 + the signal's number for a run that Ctrl-C or SIGTERM
+//! stopped: `interrupt`).
 
 mod batch;
 mod bench;
@@ -16,6 +17,7 @@ mod drape;
 mod fit;
 mod garment;
 mod inspect;
+mod interrupt;
 mod render;
 
 use crate::io::Format;
@@ -120,6 +122,13 @@ pub fn main() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        Err(e) if e.is::<interrupt::Interrupted>() => {
+            eprintln!("{e}");
+            let status = e
+                .downcast_ref::<interrupt::Interrupted>()
+                .map(|i| i.status());
+            ExitCode::from(status.unwrap_or(1))
+        }
         Err(e) => {
             eprintln!("error: {e}");
             for cause in e.chain().skip(1) {
@@ -150,6 +159,24 @@ pub fn ascii_warning(ascii: bool, format: Format) -> Option<String> {
 pub fn warn(warnings: &[String]) {
     for w in warnings {
         eprintln!("warning: {w}");
+    }
+}
+
+/// Removes the temporary files that killed runs left in `dirs` (`io::remove_stale_temps`),
+/// and says so on stderr.
+pub fn remove_stale_temps(dirs: &[&std::path::Path]) {
+    let removed: Vec<_> = dirs
+        .iter()
+        .flat_map(|d| crate::io::remove_stale_temps(d))
+        .collect();
+    if !removed.is_empty() {
+        let names: Vec<String> = removed.iter().map(|p| p.display().to_string()).collect();
+        eprintln!(
+            "note: removed {} temporary file{} left by a run that was killed: {}",
+            removed.len(),
+            if removed.len() == 1 { "" } else { "s" },
+            names.join(", ")
+        );
     }
 }
 

@@ -14,7 +14,7 @@ pub struct Contact {
 }
 
 /// Positions, velocities and contacts.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct ClothState {
     /// Positions, m.
     pub x: Vec<Point3>,

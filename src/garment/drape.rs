@@ -35,9 +35,10 @@ use crate::collide::Collider;
 use crate::math::{Point3, Vec3};
 use crate::mesh::transform::{change_up_point, Up};
 use crate::mesh::TriMesh;
-use crate::sim::{self, SelfContact, SimError, Stop, World};
+use crate::sim::{self, Control, SelfContact, SimError, Stop, World};
 use rayon::prelude::*;
 use serde::Serialize;
+use std::sync::atomic::AtomicBool;
 
 /// A particle moving slower than this is at rest, m/s: the reference pipeline's 0.3 mm per
 /// 1/60 s frame.
@@ -251,6 +252,7 @@ pub fn sew(
     seams: &[SeamPair],
     settings: &GarmentSettings,
     progress: &dyn Fn(f64),
+    cancel: Option<&AtomicBool>,
 ) -> Result<StageReport, SimError> {
     let dt = settings.solver.dt;
     let chunk = ((settings.check_every / dt).round() as u64).max(1);
@@ -271,7 +273,8 @@ pub fn sew(
     let mut history = vec![gaps];
     while report.seam_gap_max > settings.seam_closed && report.time < settings.sew_max {
         lift(world, seams, dt);
-        let stats = sim::run_quiet(world, &settings.solver, Stop::Steps(chunk))?;
+        let quiet = &mut |_: u64, _: &World| Ok(false);
+        let stats = run_stage(world, settings, Stop::Steps(chunk), None, quiet, cancel)?;
         // Sewing is quasi-static: what the seams' pull gave the panels is taken away, so they
         // do not fly on past where they meet.
         world.state.v.iter_mut().for_each(|v| *v = Vec3::zeros());
@@ -373,6 +376,7 @@ pub fn settle(
     seams: &[SeamPair],
     seam_k: f64,
     settings: &GarmentSettings,
+    cancel: Option<&AtomicBool>,
 ) -> Result<StageReport, SimError> {
     let dt = settings.solver.dt;
     world.model.gravity = GRAVITY;
@@ -394,14 +398,8 @@ pub fn settle(
         };
         Ok(quiet >= REST_FRAMES)
     };
-    let stats = sim::run(
-        world,
-        &settings.solver,
-        Stop::Steps(max_steps),
-        Some(frame),
-        &mut at_rest,
-        &|_| {},
-    )?;
+    let stop = Stop::Steps(max_steps);
+    let stats = run_stage(world, settings, stop, Some(frame), &mut at_rest, cancel)?;
     Ok(StageReport {
         time: stats.time,
         steps: stats.steps,
@@ -411,6 +409,30 @@ pub fn settle(
         sew_weight: 0.0,
         moving_fraction: last,
     })
+}
+
+/// One stage's run: `frame` every `frames` steps (`true`: at rest), ended by `cancel`.
+fn run_stage(
+    world: &mut World,
+    settings: &GarmentSettings,
+    stop: Stop,
+    frames: Option<u64>,
+    frame: &mut dyn FnMut(u64, &World) -> Result<bool, SimError>,
+    cancel: Option<&AtomicBool>,
+) -> Result<sim::RunStats, SimError> {
+    let control = Control {
+        cancel,
+        resume: None,
+    };
+    sim::run(
+        world,
+        &settings.solver,
+        stop,
+        frames,
+        frame,
+        &|_| {},
+        control,
+    )
 }
 
 /// The fraction of particles that moved more than `limit` (m) from `before` to `after`.
@@ -423,16 +445,18 @@ fn moved_fraction(before: &[Point3], after: &[Point3], limit: f64) -> f64 {
     moving as f64 / before.len().max(1) as f64
 }
 
-/// Sews and drapes `pattern` on `body` (metres, z up).
+/// Sews and drapes `pattern` on `body` (metres, z up). Once `cancel` is set, the run ends
+/// after the step it is in with `SimError::Interrupted` (a garment keeps no checkpoint).
 pub fn sew_and_drape(
     pattern: &Pattern,
     body: TriMesh,
     settings: &GarmentSettings,
     progress: &dyn Fn(f64),
+    cancel: Option<&AtomicBool>,
 ) -> Result<Garment, GarmentError> {
     let (mut world, seams, seam_k) = garment_world(pattern, body, settings)?;
-    let sew_report = sew(&mut world, &seams, settings, progress)?;
-    let drape = settle(&mut world, &seams, seam_k, settings)?;
+    let sew_report = sew(&mut world, &seams, settings, progress, cancel)?;
+    let drape = settle(&mut world, &seams, seam_k, settings, cancel)?;
     Ok(Garment {
         world,
         seams,

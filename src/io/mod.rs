@@ -511,8 +511,8 @@ where
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
     let tmp = tempfile::Builder::new()
-        .prefix(&format!(".{name}."))
-        .suffix(".tmp")
+        .prefix(&format!("{TEMP_PREFIX}{}-{name}.", std::process::id()))
+        .suffix(TEMP_SUFFIX)
         .tempfile_in(&dir)
         .map_err(werr)?;
     {
@@ -534,6 +534,76 @@ where
         tmp: tmp.into_temp_path(),
         path: path.to_path_buf(),
     })
+}
+
+/// The start of the name of every temporary file drapekit writes: the process id of the
+/// writer follows, then the target's name, random letters and [`TEMP_SUFFIX`]
+/// (`.drapekit-tmp-4242-square.obj.a1B2c3.tmp`), so that [`remove_stale_temps`] knows its own
+/// files and whether the run that wrote one is still going.
+pub const TEMP_PREFIX: &str = ".drapekit-tmp-";
+
+/// The end of the name of every temporary file drapekit writes (see [`TEMP_PREFIX`]).
+pub const TEMP_SUFFIX: &str = ".tmp";
+
+/// The process id in the name of a temporary file of drapekit's ([`TEMP_PREFIX`]); `None`
+/// for any other name.
+///
+/// ```
+/// use drapekit::io::temp_writer;
+/// assert_eq!(temp_writer(".drapekit-tmp-4242-square.obj.a1B2c3.tmp"), Some(4242));
+/// assert_eq!(temp_writer(".square.obj.a1B2c3.tmp"), None);
+/// assert_eq!(temp_writer(".drapekit-tmp-x-square.obj.tmp"), None);
+/// assert_eq!(temp_writer(".drapekit-tmp-4242-square.obj"), None);
+/// ```
+pub fn temp_writer(name: &str) -> Option<u32> {
+    let rest = name.strip_prefix(TEMP_PREFIX)?.strip_suffix(TEMP_SUFFIX)?;
+    let (pid, _) = rest.split_once('-')?;
+    if pid.is_empty() || !pid.bytes().all(|b| b.is_ascii_digit()) {
+        return None;
+    }
+    pid.parse().ok().filter(|&p| p > 0)
+}
+
+/// Whether process `pid` is running (on other systems than Unix: always, so nothing is
+/// removed).
+fn running(pid: u32) -> bool {
+    #[cfg(unix)]
+    {
+        let Ok(pid) = libc::pid_t::try_from(pid) else {
+            return false;
+        };
+        // SAFETY: signal 0 only checks that the process exists; nothing is sent.
+        let r = unsafe { libc::kill(pid, 0) };
+        r == 0 || std::io::Error::last_os_error().raw_os_error() == Some(libc::EPERM)
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = pid;
+        true
+    }
+}
+
+/// Removes the temporary files that runs killed before they could clean up (SIGKILL, a power
+/// cut) left in `dir`: regular files named by [`TEMP_PREFIX`] and [`TEMP_SUFFIX`] whose
+/// writer is no longer running. Any other file, and the files of a run still going, stay; a
+/// missing folder has none. Returns the files removed.
+pub fn remove_stale_temps(dir: &Path) -> Vec<PathBuf> {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return Vec::new();
+    };
+    let mut removed = Vec::new();
+    for e in entries.flatten() {
+        let name = e.file_name();
+        let Some(pid) = name.to_str().and_then(temp_writer) else {
+            continue;
+        };
+        let is_file = e.file_type().is_ok_and(|t| t.is_file());
+        if is_file && !running(pid) && std::fs::remove_file(e.path()).is_ok() {
+            removed.push(e.path());
+        }
+    }
+    removed.sort();
+    removed
 }
 
 /// What a name written as a file name inside an output folder may not be: empty, `.` or `..`,
@@ -629,6 +699,62 @@ mod tests {
         let json = b"\xEF\xBB\xBF {\n  \"asset\": {\"version\": \"2.0\"}}";
         assert_eq!(Format::sniff(json), Some(Format::Gltf));
         assert_eq!(Format::sniff(b"{\"units\": \"m\"}"), None);
+    }
+
+    #[test]
+    fn stale_temporary_files_of_dead_writers_go_and_nothing_else() {
+        let dir = tempfile::tempdir().unwrap();
+        let put = |name: &str| std::fs::write(dir.path().join(name), "x").unwrap();
+        // Above Linux's largest process id (2^22): no such process.
+        let dead = format!("{TEMP_PREFIX}4194305-a.obj.Xy12Zw{TEMP_SUFFIX}");
+        let live = format!(
+            "{TEMP_PREFIX}{}-b.obj.Xy12Zw{TEMP_SUFFIX}",
+            std::process::id()
+        );
+        let foreign = [
+            ".a.obj.Xy12Zw.tmp",
+            "notes.tmp",
+            ".drapekit-tmp-x-c.tmp",
+            "a.obj",
+        ];
+        put(&dead);
+        put(&live);
+        foreign.iter().for_each(|f| put(f));
+        std::fs::create_dir(
+            dir.path()
+                .join(format!("{TEMP_PREFIX}4194305-d{TEMP_SUFFIX}")),
+        )
+        .unwrap();
+        let removed = remove_stale_temps(dir.path());
+        assert_eq!(removed, [dir.path().join(&dead)]);
+        let mut left = names(dir.path());
+        left.sort();
+        let mut expected: Vec<String> = foreign.iter().map(|f| f.to_string()).collect();
+        expected.push(live);
+        expected.push(format!("{TEMP_PREFIX}4194305-d{TEMP_SUFFIX}"));
+        expected.sort();
+        assert_eq!(
+            left, expected,
+            "a live writer's file, others' files and folders stay"
+        );
+        assert!(remove_stale_temps(&dir.path().join("missing")).is_empty());
+    }
+
+    fn names(dir: &Path) -> Vec<String> {
+        std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect()
+    }
+
+    #[test]
+    fn temporary_files_carry_the_prefix_and_the_writers_id() {
+        let dir = tempfile::tempdir().unwrap();
+        let staged = stage(&dir.path().join("a.obj"), &[], |w| w.write_all(b"x")).unwrap();
+        let name = names(dir.path()).pop().unwrap();
+        assert_eq!(temp_writer(&name), Some(std::process::id()), "{name}");
+        drop(staged);
+        assert!(names(dir.path()).is_empty());
     }
 
     #[test]

@@ -16,12 +16,14 @@
 //! a window of at least 0.05 s and does not rise over it. Parallel loops work on fixed chunks of
 //! particles (`par`), so results do not depend on the number of threads.
 
+pub mod checkpoint;
 pub mod measure;
 pub mod reference;
 pub mod seams;
 pub mod settings;
 pub mod watch;
 
+pub use checkpoint::{Checkpoint, CheckpointError};
 pub use measure::{
     drape_coefficient, inside, min_clearance, particles_inside, placement_warnings, strain,
 };
@@ -46,6 +48,7 @@ use crate::mesh::transform::{change_up, Up};
 use crate::par;
 use crate::scene::{Scene, SceneError};
 use serde::Serialize;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 /// Steps between stability checks (and progress updates) at small steps.
@@ -84,6 +87,13 @@ pub enum SimError {
     /// Writing a frame failed.
     #[error("writing frame {step}: {message}")]
     Frame { step: u64, message: String },
+    /// The run was cancelled ([`Control::cancel`]); it ended after step `checkpoint.step`,
+    /// whose state the checkpoint holds.
+    #[error("interrupted after step {}", .0.step)]
+    Interrupted(Box<Checkpoint>),
+    /// A checkpoint to continue from does not fit the run.
+    #[error(transparent)]
+    Checkpoint(#[from] CheckpointError),
 }
 
 /// Everything a run needs.
@@ -338,7 +348,7 @@ impl World {
 }
 
 /// What a run measured.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct RunStats {
     /// Steps taken.
     pub steps: u64,
@@ -471,9 +481,72 @@ pub fn collide(
     moved.into_inner().unwrap().sqrt()
 }
 
+/// How a run is steered from outside: cancelled, or continued from a checkpoint.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Control<'a> {
+    /// Checked before each step: once set (a signal handler sets it), the run ends after the
+    /// last finished step with [`SimError::Interrupted`] holding its checkpoint. `None`: never.
+    pub cancel: Option<&'a AtomicBool>,
+    /// Continue from this checkpoint (of the same world and settings, `Checkpoint::fits`)
+    /// instead of the world's state: the run goes on from the step after it, to the same bits
+    /// as a run that was never stopped.
+    pub resume: Option<&'a Checkpoint>,
+}
+
+/// What the stepping loop keeps besides the world and the solver.
+struct Loop {
+    watch: watch::Watch,
+    rest: watch::Rest,
+    stats: RunStats,
+    /// Largest distance a particle moved in the last step (for the reach test).
+    travel: f64,
+}
+
+impl Loop {
+    /// The checkpoint after `step`.
+    fn checkpoint(&self, world: &World, solver: &dyn Solver, step: u64, dt: f64) -> Checkpoint {
+        Checkpoint {
+            fingerprint: checkpoint::Fingerprint {
+                scene: [0; 32],
+                options: String::new(),
+            },
+            step,
+            time: step as f64 * dt,
+            state: world.state.clone(),
+            travel: self.travel,
+            grid_built_at: world.grid_built_at.clone(),
+            watch: self.watch.saved(),
+            rest: self.rest.saved(),
+            stats: RunStats {
+                time: step as f64 * dt,
+                solver: solver.stats(),
+                ..self.stats.clone()
+            },
+            solver: solver.save(),
+            self_contact: world.self_contact.as_ref().map(|s| s.totals),
+            frames: Vec::new(),
+        }
+    }
+
+    /// Puts `c` back into the world, the solver and the loop.
+    fn restore(&mut self, c: &Checkpoint, world: &mut World, solver: &mut dyn Solver) {
+        world.state.clone_from(&c.state);
+        world.grid_built_at.clone_from(&c.grid_built_at);
+        if let (Some(sc), Some(t)) = (&mut world.self_contact, c.self_contact) {
+            sc.totals = t;
+        }
+        solver.restore(&c.solver);
+        self.watch.restore(&c.watch);
+        self.rest.restore(&c.rest);
+        self.stats = c.stats.clone();
+        self.travel = c.travel;
+    }
+}
+
 /// Runs the world with `settings`. `frame(step, world)` is called every `frames` steps; when
 /// it returns `true` the cloth is at rest and the run ends there. `progress(step)` at every
-/// check.
+/// check. `control` cancels it or continues it from a checkpoint (`Control::default()`:
+/// neither).
 pub fn run(
     world: &mut World,
     settings: &SolverSettings,
@@ -481,35 +554,40 @@ pub fn run(
     frames: Option<u64>,
     frame: &mut dyn FnMut(u64, &World) -> Result<bool, SimError>,
     progress: &dyn Fn(u64),
+    control: Control,
 ) -> Result<RunStats, SimError> {
     let start = Instant::now();
     let dt = settings.dt;
     let integrator = settings.integrator;
+    // Built from the world as loaded (a checkpoint's pinned particles are where they were).
     let mut solver: Box<dyn Solver> = integrate::make(settings, &world.model, &world.state.x);
+    let mut lp = Loop {
+        watch: watch::Watch::new(world),
+        rest: watch::Rest::new(stop, dt),
+        stats: RunStats::default(),
+        travel: 0.0,
+    };
+    let mut first = 1;
+    if let Some(c) = control.resume {
+        c.fits(world, integrator)?;
+        lp.restore(c, world, &mut *solver);
+        first = c.step + 1;
+    }
+    let wall_before = lp.stats.wall_seconds;
     let mut x_new = world.state.x.clone();
     let mut v_new = world.state.v.clone();
     let mut pred = Predicted::default();
-    let mut watch = watch::Watch::new(world);
-    let mut rest = watch::Rest::new(stop, dt);
-    let mut stats = RunStats {
-        steps: 0,
-        time: 0.0,
-        wall_seconds: 0.0,
-        predict_seconds: 0.0,
-        solve_seconds: 0.0,
-        collision_seconds: 0.0,
-        measure_seconds: 0.0,
-        solver: SolveStats::default(),
-        at_rest: false,
-    };
-    // Largest distance a particle moved in the last step (for the reach test).
-    let mut travel: f64 = 0.0;
-    for step in 1..=stop.max_steps() {
+    for step in first..=stop.max_steps() {
+        if control.cancel.is_some_and(|c| c.load(Ordering::SeqCst)) {
+            lp.stats.wall_seconds = wall_before + start.elapsed().as_secs_f64();
+            let c = lp.checkpoint(world, &*solver, step - 1, dt);
+            return Err(SimError::Interrupted(Box::new(c)));
+        }
         let t = Instant::now();
         predict(&world.model, &world.state, dt, &mut pred);
-        stats.predict_seconds += t.elapsed().as_secs_f64();
+        lp.stats.predict_seconds += t.elapsed().as_secs_f64();
         let t = Instant::now();
-        let reach = reachable(&world.state.x, &world.colliders, travel);
+        let reach = reachable(&world.state.x, &world.colliders, lp.travel);
         for (i, r) in reach.iter().enumerate() {
             if *r && world.grid_built_at[i].is_none() {
                 world.grid_built_at[i] = Some(step);
@@ -539,7 +617,7 @@ pub fn run(
                 contact: &mut state.contact,
             };
             solver.step(&input, &mut out);
-            stats.solve_seconds += t.elapsed().as_secs_f64();
+            lp.stats.solve_seconds += t.elapsed().as_secs_f64();
             let t = Instant::now();
             // The work the collide phase does on the cloth (its projections can stretch springs
             // at large steps) is counted as work put in; explicit steps are too small to need it.
@@ -551,7 +629,7 @@ pub fn run(
             if let Some(sc) = self_contact {
                 sc.apply(model, &state.x, &mut x_new, &mut v_new, dt);
             }
-            travel = collide(
+            lp.travel = collide(
                 model,
                 colliders,
                 &reach,
@@ -563,24 +641,25 @@ pub fn run(
                 &mut state.contact,
             );
             if let Some(e) = before {
-                watch.add_work(watch::mechanical(model, &x_new, &v_new, &state.x) - e);
+                lp.watch
+                    .add_work(watch::mechanical(model, &x_new, &v_new, &state.x) - e);
             }
             if !model.external.is_empty() {
                 let w = par::sum(x_new.len(), |i| {
                     model.external[i].dot(&(x_new[i] - state.x[i]))
                 });
-                watch.add_work(w);
+                lp.watch.add_work(w);
             }
             if reach.iter().any(|&r| r) || self_contact.is_some() {
-                stats.collision_seconds += t.elapsed().as_secs_f64();
+                lp.stats.collision_seconds += t.elapsed().as_secs_f64();
             }
         }
         std::mem::swap(&mut world.state.x, &mut x_new);
         std::mem::swap(&mut world.state.v, &mut v_new);
-        stats.steps = step;
+        lp.stats.steps = step;
         if step % check_every(dt) == 0 || step == stop.max_steps() {
             let t = Instant::now();
-            if let Err(reason) = watch.check(world) {
+            if let Err(reason) = lp.watch.check(world) {
                 return Err(SimError::Unstable {
                     step,
                     time: step as f64 * dt,
@@ -592,24 +671,24 @@ pub fn run(
                 });
             }
             progress(step);
-            let done = rest.at_rest(world);
-            stats.measure_seconds += t.elapsed().as_secs_f64();
+            let done = lp.rest.at_rest(world);
+            lp.stats.measure_seconds += t.elapsed().as_secs_f64();
             if done {
-                stats.at_rest = true;
+                lp.stats.at_rest = true;
                 break;
             }
         }
         if let Some(k) = frames {
             if step % k == 0 && frame(step, world)? {
-                stats.at_rest = true;
+                lp.stats.at_rest = true;
                 break;
             }
         }
     }
-    stats.time = stats.steps as f64 * dt;
-    stats.wall_seconds = start.elapsed().as_secs_f64();
-    stats.solver = solver.stats();
-    Ok(stats)
+    lp.stats.time = lp.stats.steps as f64 * dt;
+    lp.stats.wall_seconds = wall_before + start.elapsed().as_secs_f64();
+    lp.stats.solver = solver.stats();
+    Ok(lp.stats)
 }
 
 /// Runs the world without frames or progress reports.
@@ -618,7 +697,16 @@ pub fn run_quiet(
     settings: &SolverSettings,
     stop: Stop,
 ) -> Result<RunStats, SimError> {
-    run(world, settings, stop, None, &mut |_, _| Ok(false), &|_| {})
+    let control = Control::default();
+    run(
+        world,
+        settings,
+        stop,
+        None,
+        &mut |_, _| Ok(false),
+        &|_| {},
+        control,
+    )
 }
 
 /// A fabric's largest stable step at a spacing, for a lone flat square piece (the README's

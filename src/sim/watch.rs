@@ -120,6 +120,40 @@ impl Watch {
     }
 }
 
+/// The energy watch's state, for checkpoints: the start it measures from and the work put in
+/// so far.
+#[derive(Debug, Clone, PartialEq)]
+pub struct WatchState {
+    /// Positions at the start (gravity energy is measured from them), m.
+    pub x0: Vec<Point3>,
+    /// Mechanical energy at the start, J.
+    pub e0: f64,
+    /// The energy scale, J.
+    pub budget: f64,
+    /// Work done on the cloth by the collide phase so far, J.
+    pub work: f64,
+}
+
+impl Watch {
+    /// Its state (checkpoints).
+    pub fn saved(&self) -> WatchState {
+        WatchState {
+            x0: self.x0.clone(),
+            e0: self.e0,
+            budget: self.budget,
+            work: self.work,
+        }
+    }
+
+    /// Continues from a saved state.
+    pub fn restore(&mut self, s: &WatchState) {
+        self.x0.clone_from(&s.x0);
+        self.e0 = s.e0;
+        self.budget = s.budget;
+        self.work = s.work;
+    }
+}
+
 /// Kinetic + spring + gravity energy of positions `x` and velocities `v`, gravity measured from
 /// `x0`, J.
 pub fn mechanical(
@@ -152,6 +186,16 @@ impl Rest {
             window: ((0.05 / (dt * check_every(dt) as f64)).ceil() as usize).max(8),
             low: VecDeque::new(),
         }
+    }
+
+    /// The kinetic energies of the checks in its window so far, J (checkpoints).
+    pub fn saved(&self) -> Vec<f64> {
+        self.low.iter().copied().collect()
+    }
+
+    /// Continues from [`Rest::saved`].
+    pub fn restore(&mut self, low: &[f64]) {
+        self.low = low.iter().copied().collect();
     }
 
     /// Called at every check: whether the cloth is at rest.

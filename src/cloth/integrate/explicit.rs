@@ -39,13 +39,18 @@ pub fn advance(
 /// Explicit Euler or leapfrog.
 pub struct Explicit {
     integrator: Integrator,
+    /// Counters given back by `restore` (an explicit step counts nothing itself).
+    stats: SolveStats,
 }
 
 impl Explicit {
     /// The solver of an explicit `integrator`.
     pub fn new(integrator: Integrator) -> Explicit {
         assert!(integrator.is_explicit());
-        Explicit { integrator }
+        Explicit {
+            integrator,
+            stats: SolveStats::default(),
+        }
     }
 }
 
@@ -87,6 +92,15 @@ impl Solver for Explicit {
     }
 
     fn stats(&self) -> SolveStats {
-        SolveStats::default()
+        self.stats
+    }
+
+    fn restore(&mut self, state: &super::saved::SolverState) {
+        assert_eq!(
+            state.kept,
+            super::saved::Kept::Nothing,
+            "an explicit solver's state"
+        );
+        self.stats = state.stats;
     }
 }

@@ -32,6 +32,7 @@
 
 use super::cg::{self, Filter, Scratch};
 use super::direct::{BlockSystem, PENALTY};
+use super::saved::{ImplicitKept, Kept, SolverState};
 use super::LinearSolver;
 use super::{
     contact_friction, contact_normal, SolveStats, Solver, SolverSettings, StepIn, StepOut,
@@ -294,6 +295,29 @@ impl Solver for ImplicitEuler {
 
     fn stats(&self) -> SolveStats {
         self.stats
+    }
+
+    fn save(&self) -> SolverState {
+        SolverState {
+            stats: self.stats,
+            kept: Kept::Implicit(ImplicitKept {
+                stuck: self.stuck.clone(),
+                normal_force: self.normal_force.clone(),
+                slip_dir: self.slip_dir.clone(),
+            }),
+        }
+    }
+
+    fn restore(&mut self, state: &SolverState) {
+        let Kept::Implicit(k) = &state.kept else {
+            panic!("not an implicit Euler solver's state");
+        };
+        let n = self.stuck.len();
+        assert!(k.stuck.len() == n && k.normal_force.len() == n && k.slip_dir.len() == n);
+        self.stuck.clone_from(&k.stuck);
+        self.normal_force.clone_from(&k.normal_force);
+        self.slip_dir.clone_from(&k.slip_dir);
+        self.stats = state.stats;
     }
 }
 

@@ -111,6 +111,33 @@ impl DiagonalUpdate {
         self.build_c();
     }
 
+    /// The changes and the products `V^T V` (`saved`; the columns follow from the factor).
+    pub fn saved(&self) -> super::saved::UpdateKept {
+        super::saved::UpdateKept {
+            index: self.index.iter().map(|&u| u as u32).collect(),
+            delta: self.delta.clone(),
+            gram: self.gram.as_slice().to_vec(),
+        }
+    }
+
+    /// The correction `saved` from [`DiagonalUpdate::saved`] on the same factor `chol`: its
+    /// columns recomputed, its products as they were (so the solves have the same bits).
+    /// `columns_solved` is left to the caller.
+    pub fn restore(&mut self, chol: &Cholesky, saved: &super::saved::UpdateKept) {
+        let k = saved.index.len();
+        assert!(saved.delta.len() == k && saved.gram.len() == k * k);
+        self.clear();
+        self.scratch.resize(chol.len(), 0.0);
+        for &u in &saved.index {
+            let col = chol.forward_unit(u as usize, &mut self.scratch);
+            self.v.push(col);
+        }
+        self.index = saved.index.iter().map(|&u| u as usize).collect();
+        self.delta.clone_from(&saved.delta);
+        self.gram = DMatrix::from_column_slice(k, k, &saved.gram);
+        self.build_c();
+    }
+
     /// `V^T V`: products of two kept columns are copied (`from`: each slot's old slot).
     fn build_gram(&mut self, from: &[Option<usize>]) {
         let k = self.v.len();

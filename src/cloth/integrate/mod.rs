@@ -31,6 +31,7 @@ pub mod explicit;
 pub mod implicit;
 pub mod lowrank;
 pub mod projective;
+pub mod saved;
 
 use super::model::ClothModel;
 use super::state::Contact;
@@ -284,7 +285,7 @@ pub struct StepOut<'a> {
 }
 
 /// Counters of the solve phase, summed over a run.
-#[derive(Debug, Clone, Copy, Default, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
 pub struct SolveStats {
     /// Wall time spent factoring matrices, s.
     pub factor_seconds: f64,
@@ -310,6 +311,17 @@ pub trait Solver: Send {
     }
     /// Counters so far.
     fn stats(&self) -> SolveStats;
+    /// What it keeps between steps, and its counters (`saved`).
+    fn save(&self) -> saved::SolverState {
+        saved::SolverState {
+            stats: self.stats(),
+            kept: saved::Kept::Nothing,
+        }
+    }
+    /// Continues from `state`, saved from a solver of the same settings and model after the
+    /// same number of steps. Panics when its arrays do not fit the model (`sim::checkpoint`
+    /// checks them first).
+    fn restore(&mut self, state: &saved::SolverState);
 }
 
 /// The solver of `settings` for a model whose pinned particles sit at `x`.

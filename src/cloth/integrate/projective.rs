@@ -78,6 +78,7 @@
 //! stretched real cotton by 7%). A particle the face does not push at the end is released.
 
 use super::cholesky::Cholesky;
+use super::saved::{Kept, ProjectiveKept, SolverState};
 use super::{contact_friction, contact_normal};
 use super::{SolveStats, Solver, SolverSettings, StepIn, StepOut};
 use crate::cloth::elements::{Spring, SpringKind};
@@ -749,5 +750,38 @@ impl Solver for ProjectiveDynamics {
             low_rank_columns: self.update.columns_solved,
             ..self.stats
         }
+    }
+
+    fn save(&self) -> SolverState {
+        SolverState {
+            stats: self.stats(),
+            kept: Kept::Projective(ProjectiveKept {
+                stiff: self.stiff.clone(),
+                target: self.target.clone(),
+                contact: self.contact.clone(),
+                factored: self.factored.clone(),
+                update: self.update.saved(),
+            }),
+        }
+    }
+
+    fn restore(&mut self, state: &SolverState) {
+        let Kept::Projective(k) = &state.kept else {
+            panic!("not a projective-dynamics solver's state");
+        };
+        let n = self.stiff.len();
+        assert!(k.stiff.len() == n && k.target.len() == n && k.factored.len() == n);
+        self.stiff.clone_from(&k.stiff);
+        self.target.clone_from(&k.target);
+        self.contact.clone_from(&k.contact);
+        // The matrix as it was factored (the same values, so the same factor), then the
+        // correction on top of it.
+        self.weight.clone_from(&k.factored);
+        self.factor();
+        if let Some(chol) = &self.chol {
+            self.update.restore(chol, &k.update);
+        }
+        self.stats = state.stats;
+        self.update.columns_solved = state.stats.low_rank_columns;
     }
 }
