@@ -7,7 +7,9 @@
 //! * `perimeter`: the sum of the edge lengths;
 //! * `contains`: the even-odd rule (a horizontal ray's crossings);
 //! * `segments_meet`: whether two segments cross or touch, from the signs of `orient2d`;
-//! * `segment_distance`: the distance to the segment's nearest point.
+//! * `segment_distance`: the distance to the segment's nearest point;
+//! * [`crossing::self_crossing`]: two non-adjacent edges of a polygon that meet, in
+//!   O(n log n) (a sweep).
 //!
 //! ```
 //! use drapekit::geom::{contains, perimeter, signed_area2};
@@ -19,6 +21,8 @@
 //! ```
 
 use crate::math::{orient2d, Point2};
+
+pub mod crossing;
 
 /// Twice the signed area (positive counter-clockwise).
 pub fn signed_area2(p: &[Point2]) -> f64 {

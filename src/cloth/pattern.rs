@@ -37,7 +37,7 @@
 //! computes only what it needs.
 
 use super::fabric::Fabric;
-use crate::geom::{segment_distance, segments_meet};
+use crate::geom::segment_distance;
 use crate::math::{orient2d, Point2, Point3};
 use crate::mesh::polygon::triangulate_with_holes;
 use std::collections::HashMap;
@@ -235,6 +235,12 @@ pub enum PatternError {
 }
 
 /// Checks and orients an outline: distinct, finite, simple, counter-clockwise.
+///
+/// The tests run on the points scaled by a power of two (`mesh::clean::unit_scale`, exact), so
+/// coordinates of 1e300 neither overflow the crossing and area tests nor read as collinear,
+/// and 1e-300 do not underflow. Points that become equal under the scaling (a 1e-300 step
+/// beside 1e300) count as repeats. Self-crossing is found in O(n log n)
+/// (`geom::crossing`).
 pub fn clean_outline(outline: &[Point2]) -> Result<Vec<Point2>, PatternError> {
     if let Some(i) = outline
         .iter()
@@ -242,33 +248,33 @@ pub fn clean_outline(outline: &[Point2]) -> Result<Vec<Point2>, PatternError> {
     {
         return Err(PatternError::NonFinite { index: i + 1 });
     }
-    let mut p: Vec<Point2> = outline.to_vec();
-    p.dedup();
-    while p.len() > 1 && p.first() == p.last() {
+    let extent = outline
+        .iter()
+        .map(|q| q.x.abs().max(q.y.abs()))
+        .fold(0.0, f64::max);
+    let s = crate::mesh::clean::unit_scale(extent);
+    // (as given, scaled) pairs.
+    let mut p: Vec<(Point2, Point2)> = outline.iter().map(|&q| (q, q * s)).collect();
+    p.dedup_by(|a, b| a.1 == b.1);
+    while p.len() > 1 && p.first().map(|q| q.1) == p.last().map(|q| q.1) {
         p.pop();
     }
     if p.len() < 3 {
         return Err(PatternError::TooFewPoints { found: p.len() });
     }
-    let n = p.len();
-    for i in 0..n {
-        for j in i + 1..n {
-            // Adjacent edges share a corner; that is allowed.
-            if j == i + 1 || (i == 0 && j == n - 1) {
-                continue;
-            }
-            if segments_meet(&p[i], &p[(i + 1) % n], &p[j], &p[(j + 1) % n]) {
-                return Err(PatternError::SelfIntersecting {
-                    first: i + 1,
-                    second: j + 1,
-                    a: [p[i].x, p[i].y],
-                    b: [p[(i + 1) % n].x, p[(i + 1) % n].y],
-                });
-            }
-        }
+    let unit: Vec<Point2> = p.iter().map(|q| q.1).collect();
+    let mut p: Vec<Point2> = p.into_iter().map(|q| q.0).collect();
+    if let Some((i, j)) = crate::geom::crossing::self_crossing(&unit) {
+        let b = p[(i + 1) % p.len()];
+        return Err(PatternError::SelfIntersecting {
+            first: i + 1,
+            second: j + 1,
+            a: [p[i].x, p[i].y],
+            b: [b.x, b.y],
+        });
     }
-    let a2 = crate::geom::signed_area2(&p);
-    let per = crate::geom::perimeter(&p);
+    let a2 = crate::geom::signed_area2(&unit);
+    let per = crate::geom::perimeter(&unit);
     if a2.abs() <= 1e-12 * per * per {
         return Err(PatternError::ZeroArea);
     }
@@ -958,17 +964,19 @@ mod tests {
         assert!(bend_energy(&p, moved) < 1e-20);
     }
 
+    /// An L of area 0.51: a concave outline.
+    const L: [(f64, f64); 6] = [
+        (0.0, 0.0),
+        (1.0, 0.0),
+        (1.0, 0.3),
+        (0.3, 0.3),
+        (0.3, 1.0),
+        (0.0, 1.0),
+    ];
+
     #[test]
     fn concave_outline_and_errors() {
-        let l = [
-            (0.0, 0.0),
-            (1.0, 0.0),
-            (1.0, 0.3),
-            (0.3, 0.3),
-            (0.3, 1.0),
-            (0.0, 1.0),
-        ]
-        .map(|(x, y)| Point2::new(x, y));
+        let l = L.map(|(x, y)| Point2::new(x, y));
         let p = build(&l, 0.04, &Fabric::cotton(), &Pins::default()).unwrap();
         assert!((p.area - 0.51).abs() < 1e-12, "{}", p.area);
         let bow = [(0.0, 0.0), (1.0, 1.0), (1.0, 0.0), (0.0, 1.0)].map(|(x, y)| Point2::new(x, y));
@@ -989,5 +997,49 @@ mod tests {
             ),
             Err(PatternError::Pin { .. })
         ));
+    }
+
+    #[test]
+    fn outlines_at_1e300_and_1e_minus_300_are_checked_like_at_1() {
+        // An L (concave), a bow-tie (edges 1 and 3 cross) and a flat run of points, at every
+        // scale: the same verdict and the same edges named, never "collinear" for an area that
+        // overflowed (twice the L's area at 1e300 is 1e600).
+        let l = L;
+        let bow = [(0.0, 0.0), (1.0, 1.0), (1.0, 0.0), (0.0, 1.0)];
+        let flat = [(0.0, 0.0), (1.0, 0.0), (2.0, 0.0), (1.5, 0.0)];
+        for scale in [1.0, 1e300, 1e-300, 8e307] {
+            let at = |p: &[(f64, f64)]| -> Vec<Point2> {
+                p.iter()
+                    .map(|&(x, y)| Point2::new(x * scale, y * scale))
+                    .collect()
+            };
+            let clean = clean_outline(&at(&l)).unwrap_or_else(|e| panic!("{scale:e}: {e}"));
+            assert_eq!(clean, at(&l), "{scale:e}");
+            match clean_outline(&at(&bow)) {
+                Err(PatternError::SelfIntersecting {
+                    first,
+                    second,
+                    a,
+                    b,
+                }) => {
+                    assert_eq!((first, second), (1, 3), "{scale:e}");
+                    assert_eq!((a, b), ([0.0, 0.0], [scale, scale]), "{scale:e}");
+                }
+                other => panic!("{scale:e}: {other:?}"),
+            }
+            // Three collinear points and one back on them: a fold, reported as edges meeting.
+            assert!(
+                matches!(
+                    clean_outline(&at(&flat)),
+                    Err(PatternError::SelfIntersecting { .. })
+                ),
+                "{scale:e}"
+            );
+            assert_eq!(
+                clean_outline(&at(&flat[..3])),
+                Err(PatternError::ZeroArea),
+                "{scale:e}"
+            );
+        }
     }
 }
