@@ -186,19 +186,7 @@ fn tetra(s: f64) -> String {
 #[test]
 fn hostile_tetrahedra_at_1e100_and_1e_minus_100_convert() {
     for s in [1e100, 1e-100, 1e300] {
-        let d = tempfile::tempdir().unwrap();
-        let input = d.path().join("t.obj");
-        std::fs::write(&input, tetra(s)).unwrap();
-        let out = d.path().join("o.obj");
-        let o = run_within(
-            &[
-                "convert",
-                input.to_str().unwrap(),
-                "-o",
-                out.to_str().unwrap(),
-            ],
-            Duration::from_secs(20),
-        );
+        let (o, _dir, out) = convert_file("t.obj", tetra(s).as_bytes());
         let err = text(&o).1;
         assert!(!err.contains("collinear"), "{s}: {err}");
         if s == 1e300 {
@@ -270,4 +258,75 @@ fn hostile_an_object_in_the_wrong_units_or_cloth_inside_it_is_warned_before_the_
     // The scene as it is: nothing to warn about.
     let (_, w) = drape_warnings(&[]);
     assert!(w.is_empty(), "{w:?}");
+}
+
+/// Converts `bytes` (a mesh file named `name`, in a fresh folder) to `o.obj` beside it: the
+/// run, the folder and the output's path.
+fn convert_file(name: &str, bytes: &[u8]) -> (Output, tempfile::TempDir, std::path::PathBuf) {
+    let d = tempfile::tempdir().unwrap();
+    let input = d.path().join(name);
+    std::fs::write(&input, bytes).unwrap();
+    let out = d.path().join("o.obj");
+    let o = run_within(
+        &[
+            "convert",
+            input.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ],
+        Duration::from_secs(20),
+    );
+    (o, d, out)
+}
+
+/// Converts `bytes` (see [`convert_file`]) and returns stderr with the input named `name`,
+/// asserting exit 1 and nothing written.
+fn convert_refused(name: &str, bytes: &[u8]) -> String {
+    let (o, d, out) = convert_file(name, bytes);
+    let err = text(&o).1;
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(!out.exists(), "nothing written");
+    err.replace(d.path().join(name).to_str().unwrap(), name)
+}
+
+#[test]
+fn hostile_lines_longer_than_a_mebibyte_are_refused_naming_the_line() {
+    let too_long = "the line is longer than 1048576 bytes";
+    // A comment line of 2 MiB on line 3 of an OBJ.
+    let mut obj = b"v 0 0 0\nv 1 0 0\n# ".to_vec();
+    obj.extend(std::iter::repeat_n(b'x', 2 << 20));
+    obj.extend_from_slice(b"\nv 0 1 0\nf 1 2 3\n");
+    let err = convert_refused("long.obj", &obj);
+    assert!(
+        err.starts_with(&format!("error: long.obj:3: {too_long}")),
+        "{err}"
+    );
+    // A face continued over 2,000 lines of 1 KB (statement of line 4, 2 MB joined).
+    let mut obj = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3".to_vec();
+    for _ in 0..2000 {
+        obj.extend_from_slice(b" \\\n");
+        obj.extend(std::iter::repeat_n(b' ', 1000));
+    }
+    obj.extend_from_slice(b"\n");
+    let err = convert_refused("continued.obj", &obj);
+    assert!(
+        err.starts_with(&format!("error: continued.obj:4: {too_long}")),
+        "{err}"
+    );
+    // Vertex triples whose second line is a run of 1.5 MiB of digits.
+    let mut tri = b"0 0 0\n".to_vec();
+    tri.extend(std::iter::repeat_n(b'1', 3 << 19));
+    tri.extend_from_slice(b" 0 0\n0 1 0\n");
+    let err = convert_refused("long.txt", &tri);
+    assert!(
+        err.starts_with(&format!("error: long.txt:2: {too_long}")),
+        "{err}"
+    );
+    // A line of exactly 1 MiB is read (here a comment, so the triangle converts).
+    let mut ok = b"# ".to_vec();
+    ok.extend(std::iter::repeat_n(b'x', (1 << 20) - 2));
+    ok.extend_from_slice(b"\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    let (o, _dir, out) = convert_file("edge.obj", &ok);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o).1);
+    assert!(out.exists());
 }
