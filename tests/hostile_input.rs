@@ -97,6 +97,158 @@ fn hostile_step_counts_beyond_the_limit_are_refused() {
 }
 
 #[test]
+fn hostile_iteration_counts_beyond_their_limits_are_refused() {
+    let leapfrog = "integrator = \"leapfrog\"";
+    drape_refused(
+        &[(
+            leapfrog,
+            "integrator = \"projective-dynamics\"\niterations = 4000000000",
+        )],
+        &["key 'solver.iterations': 4000000000 iterations: at most 1000"],
+    );
+    drape_refused(
+        &[(
+            leapfrog,
+            "integrator = \"implicit-euler\"\nnewton_iterations = 101\ncg_max_iterations = 4294967295",
+        )],
+        &[
+            "2 problems",
+            "key 'solver.newton_iterations': 101 iterations: at most 100",
+            "key 'solver.cg_max_iterations': 4294967295 iterations: at most 100000",
+        ],
+    );
+    // The limits themselves are accepted (the scene runs two steps).
+    let (dir, path) = scene(&[
+        (
+            leapfrog,
+            "integrator = \"implicit-euler\"\nnewton_iterations = 100\ncg_max_iterations = 100000\ndt = 0.01",
+        ),
+        ("dt = 1e-4", ""),
+        (
+            "until_rest = 1e-5            # J of kinetic energy\nmax_steps = 40000",
+            "steps = 2",
+        ),
+    ]);
+    let o = run_within(
+        &[
+            "drape",
+            path.to_str().unwrap(),
+            "-o",
+            dir.path().join("out").to_str().unwrap(),
+        ],
+        Duration::from_secs(120),
+    );
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o).1);
+}
+
+#[test]
+fn hostile_frame_counts_beyond_the_limit_are_refused() {
+    // A frame every step until rest: up to 40,000 frames (each a mesh file).
+    drape_refused(
+        &[("cells = \"auto\"", "cells = \"auto\"\n[output]\nframes = 1")],
+        &["key 'output.frames': a frame every 1 steps over up to 40000 steps is 40000 frames: at most 10000; give frames = 4 or more"],
+    );
+}
+
+#[test]
+fn hostile_batch_plan_counts_beyond_the_scene_limits_are_refused() {
+    // A plan's [solver] and [garment_solver] go into every job: refused with the plan's keys,
+    // before any job is made.
+    let d = tempfile::tempdir().unwrap();
+    let ribbon = fixture("scenes/hanging_ribbon.toml");
+    let plan = d.path().join("plan.toml");
+    std::fs::write(
+        &plan,
+        format!(
+            "[[garment]]\nname = \"a\"\nscene = \"{}\"\n[solver]\niterations = 1001\nnewton_iterations = 4000000000\nanderson = 21\nsteps = 100000001\n[garment_solver]\nsettle_max = 1e300\n",
+            ribbon.display()
+        ),
+    )
+    .unwrap();
+    let o = run_within(
+        &["batch", "plan", plan.to_str().unwrap()],
+        Duration::from_secs(20),
+    );
+    let err = text(&o).1;
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    for needle in [
+        "key 'solver.iterations': 1001 iterations: at most 1000",
+        "key 'solver.newton_iterations': 4000000000 iterations: at most 100",
+        "key 'solver.anderson': must be 0 (off) to 20 vectors of history, got 21",
+        "key 'solver.steps': 100000001 steps: at most 100000000",
+        "key 'garment_solver.settle_max': 1.000e300 s: at most 3600 s",
+    ] {
+        assert!(err.contains(needle), "missing {needle:?} in {err}");
+    }
+    assert_eq!(listing(d.path()), ["plan.toml"], "nothing written");
+}
+
+#[test]
+fn hostile_garment_stage_times_beyond_the_limit_are_refused() {
+    let d = tempfile::tempdir().unwrap();
+    for (flag, value, shown) in [
+        ("--sew-max", "1e300", "1.000e300"),
+        ("--settle-max", "3601", "3601"),
+    ] {
+        let o = run_within(
+            &[
+                "garment",
+                "p.json",
+                "--body",
+                "b.obj",
+                "-o",
+                d.path().join("out").to_str().unwrap(),
+                flag,
+                value,
+            ],
+            Duration::from_secs(20),
+        );
+        let err = text(&o).1;
+        assert_eq!(o.status.code(), Some(1), "{err}");
+        assert!(
+            err.contains(&format!(
+                "{flag} {shown}: must be a positive number of simulated seconds, at most 3600"
+            )),
+            "{err}"
+        );
+    }
+    assert!(listing(d.path()).is_empty(), "nothing written");
+}
+
+#[test]
+fn hostile_bench_counts_beyond_their_limits_are_refused() {
+    for args in [
+        &["bench", "speed", "--runs", "1001"][..],
+        &["bench", "speed", "--side", "1001"],
+        &["bench", "speed", "--iterations", "1001"],
+        &["bench", "speed", "--low-rank-max", "4097"],
+        &["bench", "inside", "b.obj", "--points", "10000001"],
+        &["bench", "drape", "--steps", "100000001"],
+    ] {
+        let o = run_within(args, Duration::from_secs(20));
+        let err = text(&o).1;
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        let (flag, value) = (args[args.len() - 2], args[args.len() - 1]);
+        assert!(
+            err.contains(&format!("invalid value '{value}' for '{flag}")) && err.contains("not in"),
+            "{args:?}: {err}"
+        );
+    }
+    let o = run_within(
+        &["bench", "speed", "--duration", "1e300"],
+        Duration::from_secs(20),
+    );
+    let err = text(&o).1;
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains(
+            "--duration 1.000e300 s at dt = 1e-2 s is 1.000e302 steps: give 1 to 100000000"
+        ),
+        "{err}"
+    );
+}
+
+#[test]
 fn hostile_spacing_near_the_particle_cap_is_refused_at_once() {
     // 2.6 million particles: under the grid-node cap, but minutes and gigabytes to build.
     drape_refused(
