@@ -8,10 +8,10 @@
 //!                                  # "explicit-euler"
 //! dt = 0.01                        # s (default: 0.01 s for the implicit integrators; for the
 //!                                  # explicit ones, 0.9 of the cloth's stability estimate)
-//! newton_iterations = 1            # implicit Euler: Newton steps per step (1: Baraff-Witkin)
+//! newton_iterations = 1            # implicit Euler: Newton steps per step (1: Baraff-Witkin; <= 100)
 //! cg_tolerance = 1e-6              # implicit Euler: relative residual of conjugate gradients
-//! cg_max_iterations = 1000         # implicit Euler
-//! iterations = 10                  # projective dynamics: local/global iterations per step
+//! cg_max_iterations = 1000         # implicit Euler (<= 100000)
+//! iterations = 10                  # projective dynamics: local/global iterations per step (<= 1000)
 //! anderson = 5                     # projective dynamics: Anderson acceleration's history (0: off)
 //! strain_band = 0.01               # projective dynamics: springs free within 1% of rest length
 //! strain_tolerance = 0.01          # projective dynamics: iterate on while a spring is over 1%
@@ -43,7 +43,7 @@
 //!                                  # thickness, friction, or kes = {w, b, g, emt, t, miu}
 //! [output]
 //! ply = true                       # also write PLY
-//! frames = 100                     # write every 100th step to frames/
+//! frames = 100                     # write every 100th step to frames/ (<= 10000 frames a run)
 //! [report]
 //! disc_radius = 0.09               # Cusick test: report the drape coefficient of each piece
 //! ```
@@ -150,6 +150,22 @@ pub const MAX_CORRECTIONS: u32 = 10;
 /// The longest history of Anderson acceleration a scene may ask for (each vector is the
 /// size of the cloth; more than a few stop paying).
 pub const MAX_ANDERSON: u32 = 20;
+
+/// The most projective-dynamics iterations per step (`solver.iterations`): each is a solve
+/// with the factored matrix; the default is 10, and a few hundred converge any step.
+pub const MAX_ITERATIONS: u32 = 1000;
+
+/// The most Newton steps per step of implicit Euler (`solver.newton_iterations`; default 1).
+pub const MAX_NEWTON_ITERATIONS: u32 = 100;
+
+/// The most conjugate-gradient iterations per solve (`solver.cg_max_iterations`; default
+/// 1000): CG converges in as many as there are unknowns in exact arithmetic, and a stiff
+/// cloth needs a few thousand.
+pub const MAX_CG_ITERATIONS: u32 = 100_000;
+
+/// The most frames a run may write (`output.frames` against the run's most steps): each is a
+/// mesh file per piece, and `--glb` holds them all in memory.
+pub const MAX_FRAMES: u64 = 10_000;
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -424,8 +440,30 @@ impl Scene {
         if self.duration.is_some() {
             self.stop = Stop::Steps(steps as u64);
         }
+        if let Some(m) = self
+            .frames
+            .and_then(|k| too_many_frames(k, self.stop.max_steps()))
+        {
+            return Err(SceneError::Key {
+                path: self.path.clone(),
+                key: "output.frames".into(),
+                message: m,
+            });
+        }
         Ok(())
     }
+}
+
+/// Why a frame every `every` steps over at most `steps` steps is too many frames (more than
+/// [`MAX_FRAMES`]), or `None`.
+fn too_many_frames(every: u64, steps: u64) -> Option<String> {
+    let frames = steps / every.max(1);
+    (frames > MAX_FRAMES).then(|| {
+        format!(
+            "a frame every {every} steps over up to {steps} steps is {frames} frames: at most {MAX_FRAMES}; give frames = {} or more, or stop sooner",
+            steps.div_ceil(MAX_FRAMES)
+        )
+    })
 }
 
 impl Scene {
@@ -499,10 +537,13 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
         solver.dt = positive("solver.dt", dt, solver.dt);
     }
     let dt = solver.dt;
-    let count = |k: &str, v: Option<u32>, to: &mut u32| {
+    // A count of iterations: 1 to `most`.
+    let count = |k: &str, v: Option<u32>, most: u32, to: &mut u32| {
         if let Some(v) = v {
             if v == 0 {
                 bad(k, "must be at least 1".into());
+            } else if v > most {
+                bad(k, format!("{v} iterations: at most {most}"));
             } else {
                 *to = v;
             }
@@ -511,16 +552,19 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
     count(
         "solver.newton_iterations",
         f.solver.newton_iterations,
+        MAX_NEWTON_ITERATIONS,
         &mut solver.newton_iterations,
     );
     count(
         "solver.cg_max_iterations",
         f.solver.cg_max_iterations,
+        MAX_CG_ITERATIONS,
         &mut solver.cg_max_iterations,
     );
     count(
         "solver.iterations",
         f.solver.iterations,
+        MAX_ITERATIONS,
         &mut solver.iterations,
     );
     if let Some(t) = f.solver.cg_tolerance {
@@ -556,6 +600,7 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
     count(
         "solver.max_iterations",
         f.solver.max_iterations,
+        MAX_ITERATIONS,
         &mut solver.max_iterations,
     );
     if let Some(c) = f.solver.corrections {
@@ -927,6 +972,10 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
         ply: None,
         frames: None,
     });
+    let frames = out.frames.filter(|&k| k > 0);
+    if let Some(m) = frames.and_then(|k| too_many_frames(k, stop.max_steps())) {
+        bad("output.frames", m);
+    }
     let disc_radius = f
         .report
         .and_then(|r| r.disc_radius)
@@ -946,7 +995,7 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
             pieces,
             seams,
             ply: out.ply.unwrap_or(false),
-            frames: out.frames.filter(|&k| k > 0),
+            frames,
             disc_radius,
         }),
         1 => {

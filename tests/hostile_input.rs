@@ -97,6 +97,158 @@ fn hostile_step_counts_beyond_the_limit_are_refused() {
 }
 
 #[test]
+fn hostile_iteration_counts_beyond_their_limits_are_refused() {
+    let leapfrog = "integrator = \"leapfrog\"";
+    drape_refused(
+        &[(
+            leapfrog,
+            "integrator = \"projective-dynamics\"\niterations = 4000000000",
+        )],
+        &["key 'solver.iterations': 4000000000 iterations: at most 1000"],
+    );
+    drape_refused(
+        &[(
+            leapfrog,
+            "integrator = \"implicit-euler\"\nnewton_iterations = 101\ncg_max_iterations = 4294967295",
+        )],
+        &[
+            "2 problems",
+            "key 'solver.newton_iterations': 101 iterations: at most 100",
+            "key 'solver.cg_max_iterations': 4294967295 iterations: at most 100000",
+        ],
+    );
+    // The limits themselves are accepted (the scene runs two steps).
+    let (dir, path) = scene(&[
+        (
+            leapfrog,
+            "integrator = \"implicit-euler\"\nnewton_iterations = 100\ncg_max_iterations = 100000\ndt = 0.01",
+        ),
+        ("dt = 1e-4", ""),
+        (
+            "until_rest = 1e-5            # J of kinetic energy\nmax_steps = 40000",
+            "steps = 2",
+        ),
+    ]);
+    let o = run_within(
+        &[
+            "drape",
+            path.to_str().unwrap(),
+            "-o",
+            dir.path().join("out").to_str().unwrap(),
+        ],
+        Duration::from_secs(120),
+    );
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o).1);
+}
+
+#[test]
+fn hostile_frame_counts_beyond_the_limit_are_refused() {
+    // A frame every step until rest: up to 40,000 frames (each a mesh file).
+    drape_refused(
+        &[("cells = \"auto\"", "cells = \"auto\"\n[output]\nframes = 1")],
+        &["key 'output.frames': a frame every 1 steps over up to 40000 steps is 40000 frames: at most 10000; give frames = 4 or more"],
+    );
+}
+
+#[test]
+fn hostile_batch_plan_counts_beyond_the_scene_limits_are_refused() {
+    // A plan's [solver] and [garment_solver] go into every job: refused with the plan's keys,
+    // before any job is made.
+    let d = tempfile::tempdir().unwrap();
+    let ribbon = fixture("scenes/hanging_ribbon.toml");
+    let plan = d.path().join("plan.toml");
+    std::fs::write(
+        &plan,
+        format!(
+            "[[garment]]\nname = \"a\"\nscene = \"{}\"\n[solver]\niterations = 1001\nnewton_iterations = 4000000000\nanderson = 21\nsteps = 100000001\n[garment_solver]\nsettle_max = 1e300\n",
+            ribbon.display()
+        ),
+    )
+    .unwrap();
+    let o = run_within(
+        &["batch", "plan", plan.to_str().unwrap()],
+        Duration::from_secs(20),
+    );
+    let err = text(&o).1;
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    for needle in [
+        "key 'solver.iterations': 1001 iterations: at most 1000",
+        "key 'solver.newton_iterations': 4000000000 iterations: at most 100",
+        "key 'solver.anderson': must be 0 (off) to 20 vectors of history, got 21",
+        "key 'solver.steps': 100000001 steps: at most 100000000",
+        "key 'garment_solver.settle_max': 1.000e300 s: at most 3600 s",
+    ] {
+        assert!(err.contains(needle), "missing {needle:?} in {err}");
+    }
+    assert_eq!(listing(d.path()), ["plan.toml"], "nothing written");
+}
+
+#[test]
+fn hostile_garment_stage_times_beyond_the_limit_are_refused() {
+    let d = tempfile::tempdir().unwrap();
+    for (flag, value, shown) in [
+        ("--sew-max", "1e300", "1.000e300"),
+        ("--settle-max", "3601", "3601"),
+    ] {
+        let o = run_within(
+            &[
+                "garment",
+                "p.json",
+                "--body",
+                "b.obj",
+                "-o",
+                d.path().join("out").to_str().unwrap(),
+                flag,
+                value,
+            ],
+            Duration::from_secs(20),
+        );
+        let err = text(&o).1;
+        assert_eq!(o.status.code(), Some(1), "{err}");
+        assert!(
+            err.contains(&format!(
+                "{flag} {shown}: must be a positive number of simulated seconds, at most 3600"
+            )),
+            "{err}"
+        );
+    }
+    assert!(listing(d.path()).is_empty(), "nothing written");
+}
+
+#[test]
+fn hostile_bench_counts_beyond_their_limits_are_refused() {
+    for args in [
+        &["bench", "speed", "--runs", "1001"][..],
+        &["bench", "speed", "--side", "1001"],
+        &["bench", "speed", "--iterations", "1001"],
+        &["bench", "speed", "--low-rank-max", "4097"],
+        &["bench", "inside", "b.obj", "--points", "10000001"],
+        &["bench", "drape", "--steps", "100000001"],
+    ] {
+        let o = run_within(args, Duration::from_secs(20));
+        let err = text(&o).1;
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        let (flag, value) = (args[args.len() - 2], args[args.len() - 1]);
+        assert!(
+            err.contains(&format!("invalid value '{value}' for '{flag}")) && err.contains("not in"),
+            "{args:?}: {err}"
+        );
+    }
+    let o = run_within(
+        &["bench", "speed", "--duration", "1e300"],
+        Duration::from_secs(20),
+    );
+    let err = text(&o).1;
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains(
+            "--duration 1.000e300 s at dt = 1e-2 s is 1.000e302 steps: give 1 to 100000000"
+        ),
+        "{err}"
+    );
+}
+
+#[test]
 fn hostile_spacing_near_the_particle_cap_is_refused_at_once() {
     // 2.6 million particles: under the grid-node cap, but minutes and gigabytes to build.
     drape_refused(
@@ -186,19 +338,7 @@ fn tetra(s: f64) -> String {
 #[test]
 fn hostile_tetrahedra_at_1e100_and_1e_minus_100_convert() {
     for s in [1e100, 1e-100, 1e300] {
-        let d = tempfile::tempdir().unwrap();
-        let input = d.path().join("t.obj");
-        std::fs::write(&input, tetra(s)).unwrap();
-        let out = d.path().join("o.obj");
-        let o = run_within(
-            &[
-                "convert",
-                input.to_str().unwrap(),
-                "-o",
-                out.to_str().unwrap(),
-            ],
-            Duration::from_secs(20),
-        );
+        let (o, _dir, out) = convert_file("t.obj", tetra(s).as_bytes());
         let err = text(&o).1;
         assert!(!err.contains("collinear"), "{s}: {err}");
         if s == 1e300 {
@@ -270,4 +410,75 @@ fn hostile_an_object_in_the_wrong_units_or_cloth_inside_it_is_warned_before_the_
     // The scene as it is: nothing to warn about.
     let (_, w) = drape_warnings(&[]);
     assert!(w.is_empty(), "{w:?}");
+}
+
+/// Converts `bytes` (a mesh file named `name`, in a fresh folder) to `o.obj` beside it: the
+/// run, the folder and the output's path.
+fn convert_file(name: &str, bytes: &[u8]) -> (Output, tempfile::TempDir, std::path::PathBuf) {
+    let d = tempfile::tempdir().unwrap();
+    let input = d.path().join(name);
+    std::fs::write(&input, bytes).unwrap();
+    let out = d.path().join("o.obj");
+    let o = run_within(
+        &[
+            "convert",
+            input.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ],
+        Duration::from_secs(20),
+    );
+    (o, d, out)
+}
+
+/// Converts `bytes` (see [`convert_file`]) and returns stderr with the input named `name`,
+/// asserting exit 1 and nothing written.
+fn convert_refused(name: &str, bytes: &[u8]) -> String {
+    let (o, d, out) = convert_file(name, bytes);
+    let err = text(&o).1;
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(!out.exists(), "nothing written");
+    err.replace(d.path().join(name).to_str().unwrap(), name)
+}
+
+#[test]
+fn hostile_lines_longer_than_a_mebibyte_are_refused_naming_the_line() {
+    let too_long = "the line is longer than 1048576 bytes";
+    // A comment line of 2 MiB on line 3 of an OBJ.
+    let mut obj = b"v 0 0 0\nv 1 0 0\n# ".to_vec();
+    obj.extend(std::iter::repeat_n(b'x', 2 << 20));
+    obj.extend_from_slice(b"\nv 0 1 0\nf 1 2 3\n");
+    let err = convert_refused("long.obj", &obj);
+    assert!(
+        err.starts_with(&format!("error: long.obj:3: {too_long}")),
+        "{err}"
+    );
+    // A face continued over 2,000 lines of 1 KB (statement of line 4, 2 MB joined).
+    let mut obj = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3".to_vec();
+    for _ in 0..2000 {
+        obj.extend_from_slice(b" \\\n");
+        obj.extend(std::iter::repeat_n(b' ', 1000));
+    }
+    obj.extend_from_slice(b"\n");
+    let err = convert_refused("continued.obj", &obj);
+    assert!(
+        err.starts_with(&format!("error: continued.obj:4: {too_long}")),
+        "{err}"
+    );
+    // Vertex triples whose second line is a run of 1.5 MiB of digits.
+    let mut tri = b"0 0 0\n".to_vec();
+    tri.extend(std::iter::repeat_n(b'1', 3 << 19));
+    tri.extend_from_slice(b" 0 0\n0 1 0\n");
+    let err = convert_refused("long.txt", &tri);
+    assert!(
+        err.starts_with(&format!("error: long.txt:2: {too_long}")),
+        "{err}"
+    );
+    // A line of exactly 1 MiB is read (here a comment, so the triangle converts).
+    let mut ok = b"# ".to_vec();
+    ok.extend(std::iter::repeat_n(b'x', (1 << 20) - 2));
+    ok.extend_from_slice(b"\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    let (o, _dir, out) = convert_file("edge.obj", &ok);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o).1);
+    assert!(out.exists());
 }

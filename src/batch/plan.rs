@@ -615,7 +615,49 @@ fn integrator(p: &mut Problems, key: &str, v: Option<&str>) {
     }
 }
 
+/// A count of 1 to `most` (the scene file's limits).
+fn count(p: &mut Problems, key: &str, v: Option<u64>, most: u64, what: &str) {
+    match v {
+        Some(0) => p.add(key, "must be at least 1"),
+        Some(v) if v > most => p.add(key, format!("{v} {what}: at most {most}")),
+        _ => {}
+    }
+}
+
 fn check_solver(s: &SolverOverrides, p: &mut Problems) {
+    use crate::scene;
+    let wide = |v: Option<u32>| v.map(u64::from);
+    count(
+        p,
+        "solver.iterations",
+        wide(s.iterations),
+        scene::MAX_ITERATIONS.into(),
+        "iterations",
+    );
+    count(
+        p,
+        "solver.newton_iterations",
+        wide(s.newton_iterations),
+        scene::MAX_NEWTON_ITERATIONS.into(),
+        "iterations",
+    );
+    count(p, "solver.steps", s.steps, scene::MAX_STEPS, "steps");
+    count(
+        p,
+        "solver.max_steps",
+        s.max_steps,
+        scene::MAX_STEPS,
+        "steps",
+    );
+    if let Some(m) = s.anderson.filter(|&m| m > scene::MAX_ANDERSON) {
+        p.add(
+            "solver.anderson",
+            format!(
+                "must be 0 (off) to {} vectors of history, got {m}",
+                scene::MAX_ANDERSON
+            ),
+        );
+    }
     positive(p, "solver.dt", s.dt);
     positive(p, "solver.duration", s.duration);
     positive(p, "solver.until_rest", s.until_rest);
@@ -631,8 +673,19 @@ fn check_solver(s: &SolverOverrides, p: &mut Problems) {
 }
 
 fn check_garment_solver(s: &GarmentSolver, p: &mut Problems) {
-    positive(p, "garment_solver.sew_max", Some(s.sew_max));
-    positive(p, "garment_solver.settle_max", Some(s.settle_max));
+    use crate::garment::drape::MAX_STAGE_SECONDS;
+    for (key, v) in [
+        ("garment_solver.sew_max", s.sew_max),
+        ("garment_solver.settle_max", s.settle_max),
+    ] {
+        positive(p, key, Some(v));
+        if v > MAX_STAGE_SECONDS {
+            p.add(
+                key,
+                format!("{} s: at most {MAX_STAGE_SECONDS} s", crate::math::short(v)),
+            );
+        }
+    }
     integrator(p, "garment_solver.integrator", s.integrator.as_deref());
 }
 

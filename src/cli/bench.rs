@@ -33,11 +33,14 @@ pub enum BenchCommand {
     Garment(super::bench_garment::GarmentBench),
 }
 
+/// The most timed runs of a benchmark configuration (`--runs`).
+pub const MAX_RUNS: i64 = 1000;
+
 /// Arguments of `drapekit bench fit`.
 #[derive(Debug, clap::Args)]
 pub struct FitBench {
     /// Timed repetitions of each measurement (the median is reported).
-    #[arg(long, default_value_t = 9, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, default_value_t = 9, value_parser = clap::value_parser!(u32).range(1..=super::bench::MAX_RUNS))]
     pub runs: u32,
     /// Also draw the error against the node intervals (log-log, a line per Lanczos order) as
     /// an SVG file.
@@ -58,7 +61,7 @@ pub struct ConvertBench {
     #[arg(long, default_value_t = 0.3)]
     pub flip_fraction: f64,
     /// Timed runs of drapekit convert (the median is reported).
-    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=super::bench::MAX_RUNS))]
     pub runs: u32,
     /// A Python with trimesh installed: also time trimesh's load + merge_vertices + fix_normals + export
     /// (tools/bench_convert.sh installs one in tools/.venv).

@@ -40,10 +40,10 @@ pub struct DrapeBench {
     #[arg(long, value_name = "MESH")]
     pub body: Option<PathBuf>,
     /// Timed runs of each configuration (the median is reported).
-    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=super::bench::MAX_RUNS))]
     pub runs: u32,
-    /// Iterations per run.
-    #[arg(long, default_value_t = 1000)]
+    /// Iterations per run (at most 100,000,000, a scene's limit).
+    #[arg(long, default_value_t = 1000, value_parser = clap::value_parser!(u64).range(1..=crate::scene::MAX_STEPS))]
     pub steps: u64,
     /// Skip the slowest grid (1 x 1 x 1): every particle in the torso's box tests every face.
     #[arg(long)]

@@ -82,6 +82,7 @@ pub fn run(a: GarmentBench) -> anyhow::Result<()> {
         .clone()
         .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/realdata"));
     let fabric = Fabric::preset(&a.fabric).with_context(|| format!("--fabric {}", a.fabric))?;
+    super::garment::check_stage("--settle-max", a.settle_max)?;
     let mut settings = GarmentSettings::default();
     settings.assemble.spacing = a.spacing;
     settings.assemble.fabric = fabric;

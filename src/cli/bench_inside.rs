@@ -21,11 +21,11 @@ use std::time::Instant;
 pub struct InsideBench {
     /// A closed body (OBJ, STL or PLY), prepared as `garment` prepares it.
     pub body: PathBuf,
-    /// Random points in the body's box.
-    #[arg(long, default_value_t = 14_000, value_parser = clap::value_parser!(u32).range(1..))]
+    /// Random points in the body's box (at most 10,000,000).
+    #[arg(long, default_value_t = 14_000, value_parser = clap::value_parser!(u32).range(1..=10_000_000))]
     pub points: u32,
     /// Timed runs of each way (the median is reported).
-    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=super::bench::MAX_RUNS))]
     pub runs: u32,
 }
 

@@ -27,7 +27,7 @@ pub struct SelfContactBench {
     #[arg(long, default_value_t = 118, value_parser = clap::value_parser!(u32).range(8..=1000))]
     pub side: u32,
     /// Timed runs of each measurement (the median is reported).
-    #[arg(long, default_value_t = 7, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, default_value_t = 7, value_parser = clap::value_parser!(u32).range(1..=super::bench::MAX_RUNS))]
     pub runs: u32,
     /// Print the results as JSON.
     #[arg(long)]

@@ -31,7 +31,7 @@ use std::time::Instant;
 #[derive(Debug, clap::Args)]
 pub struct SolverBench {
     /// Timed runs of each measurement (the median is reported).
-    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=super::bench::MAX_RUNS))]
     pub runs: u32,
     /// Print the results as JSON.
     #[arg(long)]

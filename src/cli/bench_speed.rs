@@ -28,11 +28,11 @@ use serde::Serialize;
 #[derive(Debug, clap::Args)]
 pub struct SpeedBench {
     /// Timed runs of each configuration (the median is reported).
-    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=super::bench::MAX_RUNS))]
     pub runs: u32,
-    /// Particles per side of the square (default: 64, then 128).
-    #[arg(long, value_name = "N")]
-    pub side: Vec<usize>,
+    /// Particles per side of the square (default: 64, then 128; 2 to 1000).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(2..=1000))]
+    pub side: Vec<u32>,
     /// Only the 5,120-face sphere (skip the 50,000-face one).
     #[arg(long)]
     pub small_sphere_only: bool,
@@ -42,31 +42,32 @@ pub struct SpeedBench {
     /// The step, s (default: the integrator's default).
     #[arg(long)]
     pub dt: Option<f64>,
-    /// Projective dynamics: iterations per step.
-    #[arg(long)]
+    /// Projective dynamics: iterations per step (at most a scene's 1000).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=i64::from(crate::scene::MAX_ITERATIONS)))]
     pub iterations: Option<u32>,
     /// Projective dynamics: go on iterating past `--iterations` while a stretch spring is
     /// strained more than this (0.01 is 1%; 0 turns it off).
     #[arg(long, value_name = "STRAIN")]
     pub strain_tolerance: Option<f64>,
     /// Projective dynamics: the most iterations a step takes with the strain tolerance.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=i64::from(crate::scene::MAX_ITERATIONS)))]
     pub max_iterations: Option<u32>,
     /// Projective dynamics: rounds of contact corrections after the iterations (0: none).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(0..=i64::from(crate::scene::MAX_CORRECTIONS)))]
     pub corrections: Option<u32>,
-    /// Projective dynamics: Anderson acceleration's history (0: off).
-    #[arg(long)]
+    /// Projective dynamics: Anderson acceleration's history (0: off; at most 20).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(0..=i64::from(crate::scene::MAX_ANDERSON)))]
     pub anderson: Option<u32>,
-    /// Implicit Euler: Newton iterations per step.
-    #[arg(long)]
+    /// Implicit Euler: Newton iterations per step (at most a scene's 100).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=i64::from(crate::scene::MAX_NEWTON_ITERATIONS)))]
     pub newton: Option<u32>,
     /// Projective dynamics: Chebyshev spectral radius (0 turns it off).
     #[arg(long)]
     pub chebyshev: Option<f64>,
     /// Projective dynamics: particles of changed contact corrected by a low-rank update before
-    /// the matrix is refactored (0: refactor at every change).
-    #[arg(long)]
+    /// the matrix is refactored (0: refactor at every change; at most 4096, whose `k x k`
+    /// inverse takes 128 MB).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(0..=4096))]
     pub low_rank_max: Option<u32>,
     /// Friction between the cloth and the sphere.
     #[arg(long, default_value_t = 0.5)]
@@ -218,11 +219,21 @@ fn settings(a: &SpeedBench) -> SolverSettings {
 /// Runs the benchmark.
 pub fn run(a: SpeedBench) -> anyhow::Result<()> {
     let s = settings(&a);
-    let sides = if a.side.is_empty() {
+    let sides: Vec<usize> = if a.side.is_empty() {
         vec![64, 128]
     } else {
-        a.side.clone()
+        a.side.iter().map(|&n| n as usize).collect()
     };
+    let steps = a.duration / s.dt;
+    if !(steps.is_finite() && steps > 0.0 && steps <= crate::scene::MAX_STEPS as f64) {
+        anyhow::bail!(
+            "--duration {} s at dt = {:e} s is {} steps: give 1 to {} (positive numbers)",
+            crate::math::short(a.duration),
+            s.dt,
+            crate::math::short(steps),
+            crate::scene::MAX_STEPS
+        );
+    }
     let say = |t: String| {
         if !a.json {
             println!("{t}");

@@ -75,6 +75,19 @@ pub struct GarmentArgs {
     pub preview: bool,
 }
 
+/// Refuses a stage's longest simulated time (`--sew-max`, `--settle-max`) that is not
+/// positive or is over [`gd::MAX_STAGE_SECONDS`], naming the flag.
+pub fn check_stage(flag: &str, seconds: f64) -> anyhow::Result<()> {
+    if !(seconds.is_finite() && seconds > 0.0 && seconds <= gd::MAX_STAGE_SECONDS) {
+        bail!(
+            "{flag} {}: must be a positive number of simulated seconds, at most {}",
+            crate::math::short(seconds),
+            gd::MAX_STAGE_SECONDS
+        );
+    }
+    Ok(())
+}
+
 /// The report of `drapekit garment`.
 #[derive(Debug, Serialize)]
 pub struct GarmentReport {
@@ -183,8 +196,8 @@ pub(super) fn settings(args: &GarmentArgs) -> anyhow::Result<GarmentSettings> {
         Ok(())
     };
     positive(args.spacing, "--spacing")?;
-    positive(args.sew_max, "--sew-max")?;
-    positive(args.settle_max, "--settle-max")?;
+    check_stage("--sew-max", args.sew_max)?;
+    check_stage("--settle-max", args.settle_max)?;
     for (v, flag) in [
         (args.friction, "--friction"),
         (args.cloth_friction, "--cloth-friction"),

@@ -44,6 +44,10 @@ use std::sync::atomic::AtomicBool;
 /// 1/60 s frame.
 pub const REST_SPEED: f64 = 0.018;
 
+/// The longest sewing or settling stage (`--sew-max`, `--settle-max`), simulated s: an hour,
+/// 360,000 steps of 10 ms (a garment sews and settles in seconds).
+pub const MAX_STAGE_SECONDS: f64 = 3600.0;
+
 /// The drape is at rest when at most this fraction of the particles moved faster than
 /// [`REST_SPEED`] over each of [`REST_FRAMES`] frames of 1/60 s in a row: the verdict's test
 /// (`measure::Thresholds::moving_fraction`), so a drape that stops at rest passes it. (A

@@ -149,6 +149,9 @@ pub enum ProblemKind {
     /// A value out of range for its integer type.
     #[error("'{token}' is not a valid {ty}")]
     BadInteger { token: String, ty: String },
+    /// A line (an OBJ statement with its continuation lines) past the text readers' limit.
+    #[error("the line is longer than {limit} bytes (the text readers' limit, 1 MiB; an OBJ statement counts its continuation lines): no mesh statement is that long; is this a text mesh file?")]
+    LineTooLong { limit: usize },
     /// Text that is not valid in its declared encoding.
     #[error("{reason}")]
     Encoding { reason: String },

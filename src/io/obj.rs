@@ -61,7 +61,7 @@ pub fn read_from(
 ) -> Result<ReadOutput, IoError> {
     let mut st = State::default();
     let mut lines = text::LineReader::new(reader);
-    let io = text::read_error(path);
+    let io = text::line_error(path, FORMAT);
     let mut logical: Vec<u8> = Vec::new();
     while let Some((ln, raw)) = lines.next_line().map_err(io)? {
         if !continues(raw) {
@@ -72,11 +72,18 @@ pub fn read_from(
         logical.clear();
         push_continued(&mut logical, raw);
         while let Some((_, part)) = lines.next_line().map_err(io)? {
-            if !continues(part) {
+            let last = !continues(part);
+            if last {
                 logical.extend_from_slice(part);
+            } else {
+                push_continued(&mut logical, part);
+            }
+            if logical.len() > text::MAX_LINE {
+                return Err(io(text::LineError::TooLong { line: ln }));
+            }
+            if last {
                 break;
             }
-            push_continued(&mut logical, part);
         }
         st.statement(ln, &logical);
     }

@@ -1,4 +1,9 @@
 //! Helpers shared by the text readers: encodings, lines, numbers.
+//!
+//! Lines are read one at a time and are at most [`MAX_LINE`] bytes (1 MiB): a longer line is
+//! refused, naming the file and the line, before more of it is held. No mesh statement comes
+//! near it (an OBJ face of 10,000 corners is about 100 KB); a file with such a line is not a
+//! text mesh, or is damaged (a binary file read as text, a file without line ends).
 
 use super::error::{IoError, Location, ProblemKind};
 use std::borrow::Cow;
@@ -51,17 +56,41 @@ pub fn decode_file<'a>(
     })
 }
 
-/// Turns a failure to read `path` into its [`IoError`].
-pub fn read_error(path: &Path) -> impl Fn(std::io::Error) -> IoError + Copy + '_ {
-    move |source| IoError::Read {
-        path: path.to_path_buf(),
-        source,
+/// The longest line the text readers take, bytes (1 MiB, line end excluded).
+pub const MAX_LINE: usize = 1 << 20;
+
+/// Why the next line could not be read.
+#[derive(Debug)]
+pub enum LineError {
+    /// The reader failed.
+    Io(std::io::Error),
+    /// Line `line` is longer than [`MAX_LINE`] bytes.
+    TooLong { line: u64 },
+}
+
+/// Turns a failure to read a line of `path` (a `format` file) into its [`IoError`]: a read
+/// error, or a line too long (a malformed file, naming the line).
+pub fn line_error<'a>(
+    path: &'a Path,
+    format: &'static str,
+) -> impl Fn(LineError) -> IoError + Copy + 'a {
+    move |e| match e {
+        LineError::Io(source) => IoError::Read {
+            path: path.to_path_buf(),
+            source,
+        },
+        LineError::TooLong { line } => super::error::malformed(
+            path,
+            format,
+            Location::Line(line),
+            ProblemKind::LineTooLong { limit: MAX_LINE },
+        ),
     }
 }
 
 /// Lines read one at a time from a [`BufRead`], with their 1-based numbers and the line end
-/// (`\n`, `\r\n` or a lone `\r`) removed. Only the current line is held: memory is the longest
-/// line, whatever the number of lines.
+/// (`\n`, `\r\n` or a lone `\r`) removed. Only the current line is held, and at most
+/// [`MAX_LINE`] bytes of it: memory is bounded whatever the file.
 pub struct LineReader<R> {
     inner: R,
     line: Vec<u8>,
@@ -81,35 +110,45 @@ impl<R: BufRead> LineReader<R> {
         }
     }
 
-    /// The next line and its number; `None` at the end.
-    pub fn next_line(&mut self) -> std::io::Result<Option<(u64, &[u8])>> {
+    /// The next line and its number; `None` at the end; an error when the line is longer than
+    /// [`MAX_LINE`] bytes (nothing past the limit is kept).
+    pub fn next_line(&mut self) -> Result<Option<(u64, &[u8])>, LineError> {
+        self.next_line_within(MAX_LINE)
+    }
+
+    /// [`LineReader::next_line`] with a limit of `limit` bytes.
+    fn next_line_within(&mut self, limit: usize) -> Result<Option<(u64, &[u8])>, LineError> {
         self.line.clear();
-        if std::mem::take(&mut self.after_cr) && self.inner.fill_buf()?.first() == Some(&b'\n') {
+        let io = LineError::Io;
+        if std::mem::take(&mut self.after_cr)
+            && self.inner.fill_buf().map_err(io)?.first() == Some(&b'\n')
+        {
             self.inner.consume(1);
         }
-        if self.inner.fill_buf()?.is_empty() {
+        if self.inner.fill_buf().map_err(io)?.is_empty() {
             return Ok(None);
         }
+        self.number += 1;
         loop {
-            let chunk = self.inner.fill_buf()?;
+            let chunk = self.inner.fill_buf().map_err(io)?;
             if chunk.is_empty() {
                 break;
             }
-            match chunk.iter().position(|&b| b == b'\n' || b == b'\r') {
+            let end = chunk.iter().position(|&b| b == b'\n' || b == b'\r');
+            let take = end.unwrap_or(chunk.len());
+            if self.line.len() + take > limit {
+                return Err(LineError::TooLong { line: self.number });
+            }
+            self.line.extend_from_slice(&chunk[..take]);
+            match end {
                 Some(i) => {
                     self.after_cr = chunk[i] == b'\r';
-                    self.line.extend_from_slice(&chunk[..i]);
                     self.inner.consume(i + 1);
                     break;
                 }
-                None => {
-                    let n = chunk.len();
-                    self.line.extend_from_slice(chunk);
-                    self.inner.consume(n);
-                }
+                None => self.inner.consume(take),
             }
         }
-        self.number += 1;
         Ok(Some((self.number, &self.line)))
     }
 
@@ -206,6 +245,63 @@ mod tests {
             vec![b"".to_vec(), b"a".to_vec(), b"".to_vec(), b"b".to_vec()]
         );
         assert_eq!(lines(b"").count(), 0);
+    }
+
+    /// An endless line, handed out in 8 KiB pieces, counting what it handed out.
+    struct Endless {
+        piece: Vec<u8>,
+        given: usize,
+    }
+
+    impl std::io::Read for Endless {
+        fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+            let n = buf.len().min(self.piece.len());
+            buf[..n].copy_from_slice(&self.piece[..n]);
+            self.given += n;
+            Ok(n)
+        }
+    }
+
+    impl std::io::BufRead for Endless {
+        fn fill_buf(&mut self) -> std::io::Result<&[u8]> {
+            Ok(&self.piece)
+        }
+        fn consume(&mut self, n: usize) {
+            self.given += n;
+        }
+    }
+
+    #[test]
+    fn hostile_endless_line_is_refused_at_the_limit() {
+        let mut r = LineReader::new(Endless {
+            piece: vec![b'7'; 8192],
+            given: 0,
+        });
+        match r.next_line() {
+            Err(LineError::TooLong { line: 1 }) => {}
+            other => panic!("{:?}", other.map(|l| l.map(|(n, b)| (n, b.len())))),
+        }
+        // Nothing past the limit was held or read.
+        assert!(r.held() <= MAX_LINE, "held {}", r.held());
+        assert!(r.inner.given <= MAX_LINE, "read {}", r.inner.given);
+    }
+
+    #[test]
+    fn lines_up_to_the_limit_are_read_and_the_next_longer_one_is_named() {
+        // Lines of the limit's length and one byte more, with every kind of line end, read
+        // through a small buffer (the line arrives in pieces).
+        let limit = 100;
+        let ok = "x".repeat(limit);
+        for end in ["\n", "\r\n", "\r"] {
+            let text = format!("a{end}{ok}{end}{ok}x{end}b{end}");
+            let mut r = LineReader::new(std::io::BufReader::with_capacity(7, text.as_bytes()));
+            assert_eq!(r.next_line_within(limit).unwrap(), Some((1, &b"a"[..])));
+            assert_eq!(r.next_line_within(limit).unwrap(), Some((2, ok.as_bytes())));
+            assert!(matches!(
+                r.next_line_within(limit),
+                Err(LineError::TooLong { line: 3 })
+            ));
+        }
     }
 
     /// A reader that hands out a million blank lines a few bytes at a time, and what the

@@ -58,7 +58,7 @@ pub fn read_from(
     let mut face_lines = 0usize;
     let mut point_lines = 0usize;
     let mut lines = text::LineReader::new(reader);
-    let io = text::read_error(path);
+    let io = text::line_error(path, FORMAT);
     while let Some((ln, line)) = lines.next_line().map_err(io)? {
         let trimmed = line.trim_ascii();
         if trimmed.is_empty() {
