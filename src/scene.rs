@@ -864,6 +864,15 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
         };
         let position = p.position.unwrap_or([0.0; 3]);
         finite(&k("position"), &position);
+        let reach = position
+            .iter()
+            .chain(p.outline.iter().flatten())
+            .map(|v| v.abs())
+            .fold(0.0, f64::max)
+            * to_m;
+        if let Some(m) = too_far(reach, spacing) {
+            bad(&k("position"), m);
+        }
         let rotation = p.rotation.unwrap_or([0.0; 3]);
         finite(&k("rotation"), &rotation);
         let outline: Vec<Point2> = p
@@ -1011,6 +1020,26 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
             problems,
         }),
     }
+}
+
+/// The finest relative step of f64 coordinates a piece needs: the gap between neighbouring
+/// numbers where the piece reaches must be at most this fraction of its spacing.
+pub const COORDINATE_RESOLUTION: f64 = 1e-6;
+
+/// Why a piece of `spacing` reaching `reach` m from the origin (its position plus its
+/// outline) is too far: there, neighbouring f64 numbers are more than
+/// [`COORDINATE_RESOLUTION`] of the spacing apart, and the cloth's shape is lost to rounding.
+fn too_far(reach: f64, spacing: f64) -> Option<String> {
+    let gap = reach * f64::EPSILON;
+    (gap.is_finite() && gap > COORDINATE_RESOLUTION * spacing).then(|| {
+        format!(
+            "reaches {} m from the origin, where coordinates are {} m apart: more than a millionth of the spacing ({} m), so rounding would break the cloth; place it within {} m of the origin",
+            short(reach),
+            short(gap),
+            short(spacing),
+            short(COORDINATE_RESOLUTION * spacing / f64::EPSILON)
+        )
+    })
 }
 
 fn unknown_preset(name: &str) -> String {

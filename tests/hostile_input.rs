@@ -261,23 +261,45 @@ fn hostile_spacing_near_the_particle_cap_is_refused_at_once() {
 }
 
 #[test]
-fn hostile_placement_at_1e308_ends() {
+fn hostile_placement_at_1e308_is_refused_naming_the_key_and_the_rounding() {
+    // At 1e308 neighbouring f64 numbers are about 2e292 apart: the 2 cm spacing is lost.
+    drape_refused(
+        &[(
+            "position = [0.0, 0.0, 0.33]",
+            "position = [0.0, 0.0, 1e308]",
+        )],
+        &[
+            "key 'piece[1].position': reaches 1.000e308 m from the origin",
+            "where coordinates are 2.220e292 m apart",
+            "more than a millionth of the spacing (0.02 m)",
+            "place it within 9.007e7 m of the origin",
+        ],
+    );
+    // Just inside that reach, the same scene runs and its cloth stays finite.
     let (dir, path) = scene(&[
         (
             "position = [0.0, 0.0, 0.33]",
-            "position = [0.0, 0.0, 1e308]",
+            "position = [0.0, 0.0, 9.0e7]",
         ),
         (
             "until_rest = 1e-5            # J of kinetic energy\nmax_steps = 40000",
             "steps = 2",
         ),
     ]);
-    let out = dir.path().join("out.obj");
+    let out = dir.path().join("out");
     let o = run_within(
         &["drape", path.to_str().unwrap(), "-o", out.to_str().unwrap()],
         Duration::from_secs(60),
     );
-    assert!(o.status.code().is_some(), "{}", text(&o).1);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o).1);
+    let obj = std::fs::read_to_string(out.join("square.obj")).unwrap();
+    let zs: Vec<f64> = obj
+        .lines()
+        .filter_map(|l| l.strip_prefix("v "))
+        .map(|l| l.split_whitespace().nth(2).unwrap().parse().unwrap())
+        .collect();
+    assert_eq!(zs.len(), 1681);
+    assert!(zs.iter().all(|z| (z - 9.0e7).abs() < 1.0), "{:?}", &zs[..3]);
 }
 
 fn fit_refused(extra: &[&str], parts: &[&str]) {
