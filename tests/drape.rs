@@ -789,6 +789,7 @@ fn caught_at_the_first_check_over_the_budget(f: &Fabric, dt: f64, steps: u64) ->
             Ok(false)
         },
         &|_| {},
+        Default::default(),
     );
     let e = r.expect_err("unstable");
     let SimError::Unstable { step, reason, .. } = &e else {
