@@ -485,7 +485,13 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
         path: path.to_path_buf(),
         source,
     })?;
-    let f: File = toml::from_str(&text).map_err(|e| SceneError::Toml {
+    parse(&text, path)
+}
+
+/// Parses and validates a scene file's `text`, as [`read`]: `path` names it in errors, and its
+/// folder is where the objects' meshes are looked for.
+pub fn parse(text: &str, path: &Path) -> Result<Scene, SceneError> {
+    let f: File = toml::from_str(text).map_err(|e| SceneError::Toml {
         path: path.to_path_buf(),
         message: e.to_string().trim_end().to_string(),
     })?;

@@ -356,7 +356,13 @@ pub fn read(path: &Path) -> Result<Plan, BatchError> {
         path: path.to_path_buf(),
         source,
     })?;
-    let f: PlanFile = toml::from_str(&text).map_err(|e| BatchError::Toml {
+    parse(&text, path)
+}
+
+/// Parses and validates a plan's `text`, as [`read`]: `path` names it in errors, and the files
+/// the plan names are looked for relative to its folder.
+pub fn parse(text: &str, path: &Path) -> Result<Plan, BatchError> {
+    let f: PlanFile = toml::from_str(text).map_err(|e| BatchError::Toml {
         path: path.to_path_buf(),
         message: e.to_string().trim_end().to_string(),
     })?;

@@ -67,11 +67,17 @@ pub fn read_any(path: &Path) -> Result<Imported, FitError> {
         path: path.to_path_buf(),
         source,
     })?;
+    parse_any(&text, path)
+}
+
+/// A measurement set's `text` in any of the formats, told apart as by [`read_any`] (`path`
+/// names it in errors, and its extension is the second clue).
+pub fn parse_any(text: &str, path: &Path) -> Result<Imported, FitError> {
     let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("");
     let ext = ext.to_ascii_lowercase();
     let trimmed = text.trim_start_matches('\u{feff}').trim_start();
     if trimmed.starts_with('{') || ext == "json" {
-        let value: serde_json::Value = serde_json::from_str(&text).map_err(|e| FitError::Json {
+        let value: serde_json::Value = serde_json::from_str(text).map_err(|e| FitError::Json {
             path: path.to_path_buf(),
             line: e.line(),
             column: e.column(),
@@ -80,9 +86,9 @@ pub fn read_any(path: &Path) -> Result<Imported, FitError> {
         return from_freesewing(&value, path);
     }
     if ext == "yaml" || ext == "yml" || trimmed.starts_with("body:") {
-        return from_garmentcode(&text, path);
+        return from_garmentcode(text, path);
     }
-    let measurements = super::measurements::read_str(&text, path)?;
+    let measurements = super::measurements::read_str(text, path)?;
     Ok(Imported {
         measurements,
         format: "toml",

@@ -51,13 +51,19 @@ pub fn read(path: &Path) -> Result<SectionsFile, FitError> {
         path: path.to_path_buf(),
         source,
     })?;
+    parse(&text, path)
+}
+
+/// Parses a sections file's `text`, CSV or JSON by `path`'s extension as [`read`] (`path` names
+/// it in errors).
+pub fn parse(text: &str, path: &Path) -> Result<SectionsFile, FitError> {
     let csv = path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("csv"));
     if csv {
-        read_csv(path, &text)
+        read_csv(path, text)
     } else {
-        read_json(path, &text)
+        read_json(path, text)
     }
 }
 

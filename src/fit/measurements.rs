@@ -35,11 +35,15 @@
 //! **Between the levels** the girth, ratio, exponent and offset follow monotone cubic (PCHIP)
 //! interpolation in height, with no overshoot. Sections are generated at every level and at
 //! even spacing in between, about `levels` in all.
+//!
+//! **Limits.** Every section must be finite numbers, so lengths whose products and quotients
+//! leave the range of an f64 are refused by key: a stature outside 1e-100..1e100, a girth,
+//! width or depth over 10 times the stature, levels closer than 1e-6 of the stature.
 
 use super::error::FitError;
 use super::fitter::GirthTarget;
 use super::section::{perimeter, Section};
-use crate::math::Point2;
+use crate::math::{short, Point2};
 use crate::mesh::transform::Units;
 use serde::Deserialize;
 use std::path::Path;
@@ -180,6 +184,19 @@ const SHOULDER_WIDTH: f64 = 0.220;
 
 /// Points sampled on each superellipse before resampling.
 const SHAPE_POINTS: usize = 720;
+
+/// The stature's range, in the file's units: far beyond it the shape model's products and
+/// quotients of lengths (PCHIP's slopes and their harmonic means) leave the range of an f64
+/// (at a stature of 1e-300 they underflow to an infinite slope).
+const STATURE_RANGE: (f64, f64) = (1e-100, 1e100);
+
+/// The most a girth, width or depth may be, as a multiple of the stature (a body's largest
+/// girth is about 0.6 of it); beyond, the model's sections need not be finite.
+const MAX_TO_STATURE: f64 = 10.0;
+
+/// The least distance between two levels, as a fraction of the stature (the default levels are
+/// 0.024 to 0.07 apart): closer levels give PCHIP slopes that overflow.
+const MIN_LEVEL_GAP: f64 = 1e-6;
 
 /// Reads a measurements file.
 pub fn read(path: &Path) -> Result<Measurements, FitError> {
@@ -325,6 +342,15 @@ pub fn sections(
         }
     };
     positive("stature", Some(stature))?;
+    if !(STATURE_RANGE.0..=STATURE_RANGE.1).contains(&stature) {
+        return Err(key_err(
+            "stature",
+            format!(
+                "{} is outside {:e}..{:e} (beyond, the shape model's arithmetic leaves the range of an f64)",
+                short(stature), STATURE_RANGE.0, STATURE_RANGE.1
+            ),
+        ));
+    }
     let girth_keys = [
         ("neck_base_girth", "neck_base", m.neck_base_girth),
         ("bust_girth", "bust", m.bust_girth),
@@ -335,6 +361,39 @@ pub fn sections(
     ];
     for (k, _, v) in girth_keys {
         positive(k, v)?;
+    }
+    let across = [
+        ("neck_base_girth", m.neck_base_girth),
+        ("bust_girth", m.bust_girth),
+        ("underbust_girth", m.underbust_girth),
+        ("waist_girth", m.waist_girth),
+        ("top_hip_girth", m.top_hip_girth),
+        ("hip_girth", m.hip_girth),
+        ("shoulder_width", m.shoulder_width),
+        ("neck_base_width", m.neck_base_width),
+        ("neck_base_depth", m.neck_base_depth),
+        ("bust_width", m.bust_width),
+        ("bust_depth", m.bust_depth),
+        ("underbust_width", m.underbust_width),
+        ("underbust_depth", m.underbust_depth),
+        ("waist_width", m.waist_width),
+        ("waist_depth", m.waist_depth),
+        ("top_hip_width", m.top_hip_width),
+        ("top_hip_depth", m.top_hip_depth),
+        ("hip_width", m.hip_width),
+        ("hip_depth", m.hip_depth),
+    ];
+    for (k, v) in across {
+        if let Some(v) = v.filter(|&v| v > MAX_TO_STATURE * stature) {
+            return Err(key_err(
+                k,
+                format!(
+                    "{} is more than {MAX_TO_STATURE} times the stature {}: no body is that wide",
+                    short(v),
+                    short(stature)
+                ),
+            ));
+        }
     }
     let given_girths = girth_keys.iter().filter(|g| g.2.is_some()).count();
     if given_girths < 2 {
@@ -383,7 +442,7 @@ pub fn sections(
         })
         .collect();
     for i in 1..z.len() {
-        if z[i] <= z[i - 1] {
+        if z[i] - z[i - 1] < MIN_LEVEL_GAP * stature {
             let name = |j: usize| {
                 if heights[j].0.is_empty() {
                     format!("the {} level (default)", LEVELS[j].name)
@@ -391,10 +450,15 @@ pub fn sections(
                     heights[j].0.to_string()
                 }
             };
+            let why = if z[i] <= z[i - 1] {
+                String::new()
+            } else {
+                format!(" by {MIN_LEVEL_GAP:e} of the stature (levels closer than that make the model's slopes overflow)")
+            };
             return Err(key_err(
                 heights[i].0,
                 format!(
-                    "{} at {} is not above {} at {}",
+                    "{} at {} is not above {} at {}{why}",
                     name(i),
                     z[i],
                     name(i - 1),
@@ -590,5 +654,79 @@ mod tests {
             sections(&none, p, 41).unwrap_err().to_string(),
             "m.toml: key 'stature': is required"
         );
+    }
+
+    #[test]
+    fn lengths_that_would_overflow_the_model_are_refused_by_key() {
+        // Found by tests/fuzz_mutation.rs: each gave sections of inf or NaN, which the fitter
+        // then refused as "section 26: point 1 is not a finite number".
+        let p = Path::new("m.toml");
+        let base = read_str("stature = 170\nbust_girth = 90\nwaist_girth = 70\n", p).unwrap();
+        let err = |m: Measurements| sections(&m, p, 41).unwrap_err().to_string();
+        let huge = err(Measurements {
+            stature: Some(1e308),
+            ..base.clone()
+        });
+        assert!(
+            huge.starts_with("m.toml: key 'stature': 1.000e308 is outside 1e-100..1e100"),
+            "{huge}"
+        );
+        let tiny = err(Measurements {
+            stature: Some(1e-300),
+            bust_girth: Some(1e-299),
+            waist_girth: Some(1e-301),
+            ..base.clone()
+        });
+        assert!(tiny.contains("key 'stature'"), "{tiny}");
+        let wide = err(Measurements {
+            shoulder_width: Some(1e308),
+            ..base.clone()
+        });
+        assert!(
+            wide.contains("key 'shoulder_width'") && wide.contains("more than 10 times"),
+            "{wide}"
+        );
+        let girth = err(Measurements {
+            waist_girth: Some(1701.0),
+            ..base.clone()
+        });
+        assert!(girth.contains("key 'waist_girth'"), "{girth}");
+        // The levels below the waist are placed between the floor and it: 1e-320 apart.
+        let close = err(Measurements {
+            waist_height: Some(1e-320),
+            ..base.clone()
+        });
+        assert!(close.contains("by 1e-6 of the stature"), "{close}");
+        // At the limits, every section is finite.
+        for m in [
+            Measurements {
+                stature: Some(1e100),
+                bust_girth: Some(1e101),
+                waist_girth: Some(1e98),
+                ..base.clone()
+            },
+            Measurements {
+                stature: Some(1e-100),
+                bust_girth: Some(1e-99),
+                waist_girth: Some(1e-102),
+                ..base.clone()
+            },
+            Measurements {
+                waist_girth: Some(1700.0),
+                ..base.clone()
+            },
+            Measurements {
+                waist_height: Some(107.0),
+                top_hip_height: Some(107.0 - 1.5 * 170e-6),
+                ..base.clone()
+            },
+        ] {
+            let (s, _, _) = sections(&m, p, 41).unwrap();
+            assert!(
+                s.iter().all(|s| s.height.is_finite()
+                    && s.points.iter().all(|q| q.x.is_finite() && q.y.is_finite())),
+                "{m:?}"
+            );
+        }
     }
 }

@@ -348,6 +348,11 @@ pub fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<ReadOutput,
     let mut extra_lines = 0u64;
     let mut missing_lists = 0u64;
     for el in &header.elements {
+        // A binary record of no properties holds no bytes: there is nothing to read, however
+        // large the count (2^64 - 1 would otherwise loop for ever over empty records).
+        if el.props.is_empty() && header.encoding != Encoding::Ascii {
+            continue;
+        }
         let r = roles(el);
         // Don't trust the count for allocation beyond what the file could hold.
         let cap = (el.count as usize).min(body.len() / 2 + 1);
