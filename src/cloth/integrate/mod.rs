@@ -377,24 +377,30 @@ pub fn coulomb(v: &mut Vec3, n: &Vec3, jn: f64, mu: f64) {
 /// lands: found after the solve only, the particles that hit are put back while their
 /// neighbours have fallen a whole step further.
 pub fn speculate(input: &StepIn, contact: &mut [Option<Contact>]) {
+    contacts_along(input, input.y, contact);
+}
+
+/// The paper's segment test from `x` to `ends` for every free particle not yet in contact:
+/// one whose path meets a face gets its contact in `contact`. Returns whether any did.
+pub fn contacts_along(input: &StepIn, ends: &[Point3], contact: &mut [Option<Contact>]) -> bool {
     let StepIn {
         model,
         x,
-        y,
         colliders,
         reach,
         ..
     } = *input;
     if !reach.iter().any(|&r| r) {
-        return;
+        return false;
     }
+    let found = std::sync::atomic::AtomicBool::new(false);
     crate::par::for_chunks(crate::sim::COLLISION_CHUNK, contact, |base, cs| {
         for k in 0..cs.len() {
             let i = base + k;
             if model.pinned(i) || cs[k].is_some() {
                 continue;
             }
-            let (mut p, mut v) = (y[i], Vec3::zeros());
+            let (mut p, mut v) = (ends[i], Vec3::zeros());
             crate::collide::contact::resolve(
                 colliders,
                 reach,
@@ -404,8 +410,12 @@ pub fn speculate(input: &StepIn, contact: &mut [Option<Contact>]) {
                 model.thickness[i],
                 &mut cs[k],
             );
+            if cs[k].is_some() {
+                found.store(true, std::sync::atomic::Ordering::Relaxed);
+            }
         }
     });
+    found.into_inner()
 }
 
 #[cfg(test)]

@@ -385,7 +385,7 @@ impl ProjectiveDynamics {
         super::speculate(input, &mut self.contact);
         for i in 0..n {
             self.weight[i] = if self.contact[i].is_some() {
-                CONTACT_WEIGHT * self.stiff[i] * input.model.mass[i] / (input.dt * input.dt)
+                self.contact_weight(input, i)
             } else {
                 0.0
             };
@@ -612,10 +612,7 @@ impl ProjectiveDynamics {
     /// weight changed.
     fn stiffen_sunk(&mut self, input: &StepIn) -> bool {
         let StepIn {
-            model,
-            colliders,
-            dt,
-            ..
+            model, colliders, ..
         } = *input;
         self.project_contacts(input);
         let mut changed = false;
@@ -625,7 +622,7 @@ impl ProjectiveDynamics {
             let sunk = (self.target[i] - self.p[i]).dot(&contact_normal(colliders, ct));
             if sunk > CONTACT_SINK * th && self.stiff[i] < CONTACT_STIFFEN_MAX {
                 self.stiff[i] = (self.stiff[i] * CONTACT_STIFFEN).min(CONTACT_STIFFEN_MAX);
-                self.weight[i] = CONTACT_WEIGHT * self.stiff[i] * model.mass[i] / (dt * dt);
+                self.weight[i] = self.contact_weight(input, i);
                 changed = true;
             }
         }
@@ -636,45 +633,20 @@ impl ProjectiveDynamics {
     /// whose path from `x` to its solved position meets a face (the paper's segment test) gets
     /// its contact constraint. Returns whether any did.
     fn late_contacts(&mut self, input: &StepIn) -> bool {
-        let StepIn {
-            model,
-            x,
-            colliders,
-            reach,
-            dt,
-            ..
-        } = *input;
-        let p = &self.p;
-        let found = std::sync::atomic::AtomicBool::new(false);
-        crate::par::for_chunks(
-            crate::sim::COLLISION_CHUNK,
-            &mut self.contact,
-            |base, cs| {
-                for k in 0..cs.len() {
-                    let i = base + k;
-                    if model.pinned(i) || cs[k].is_some() {
-                        continue;
-                    }
-                    let (mut q, mut v) = (p[i], Vec3::zeros());
-                    let th = model.thickness[i];
-                    if crate::collide::contact::resolve(
-                        colliders, reach, &x[i], &mut q, &mut v, th, &mut cs[k],
-                    ) && cs[k].is_some()
-                    {
-                        found.store(true, std::sync::atomic::Ordering::Relaxed);
-                    }
-                }
-            },
-        );
-        if !found.into_inner() {
+        if !super::contacts_along(input, &self.p, &mut self.contact) {
             return false;
         }
-        for (i, c) in self.contact.iter().enumerate() {
-            if c.is_some() && self.weight[i] == 0.0 {
-                self.weight[i] = CONTACT_WEIGHT * self.stiff[i] * model.mass[i] / (dt * dt);
+        for i in 0..input.model.len() {
+            if self.contact[i].is_some() && self.weight[i] == 0.0 {
+                self.weight[i] = self.contact_weight(input, i);
             }
         }
         true
+    }
+
+    /// The contact weight of particle `i` (module notes), N/m.
+    fn contact_weight(&self, input: &StepIn, i: usize) -> f64 {
+        CONTACT_WEIGHT * self.stiff[i] * input.model.mass[i] / (input.dt * input.dt)
     }
 }
 
