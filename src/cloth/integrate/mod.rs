@@ -27,6 +27,7 @@ pub mod anderson;
 pub mod cg;
 pub mod cholesky;
 pub mod direct;
+pub mod etree;
 pub mod explicit;
 pub mod implicit;
 pub mod lowrank;
