@@ -26,8 +26,15 @@ const TUBE: &str = r#"{"pattern": {"panels": {
 
 /// A closed cylinder about the z axis (drapekit's frame) of radius `r` from z0 to z1.
 fn cylinder(r: f64, z0: f64, z1: f64, n: usize) -> TriMesh {
+    frustum(r, r, z0, z1, n)
+}
+
+/// A closed frustum about the z axis: `n`-gons of radius `r0` at z0 and `r1` at z1. Its
+/// section at z is the `n`-gon of radius `r0 + (r1 - r0) (z - z0) / (z1 - z0)`, of perimeter
+/// `2 n r sin(pi / n)` (each side face is a planar trapezoid).
+fn frustum(r0: f64, r1: f64, z0: f64, z1: f64, n: usize) -> TriMesh {
     let mut p = Vec::new();
-    for &z in &[z0, z1] {
+    for &(r, z) in &[(r0, z0), (r1, z1)] {
         for k in 0..n {
             let a = std::f64::consts::TAU * k as f64 / n as f64;
             p.push(Point3::new(r * a.cos(), r * a.sin(), z));
@@ -470,4 +477,171 @@ fn dress_pencil_gathers_its_bodice_into_the_skirt() {
     let total: f64 = g[2..].iter().map(|s| s.lengths_mm[1]).sum();
     assert!((total - 843.0).abs() < 1.0, "the skirt's waist: {total} mm");
     assert!(drapekit::garment::gathers::gathers(&read("shirt_mean")).is_empty());
+}
+
+/// A top tube (y 100 to 140 cm) sewn to a bottom tube (y 60 to 100 cm) at y = 100: a waist
+/// seam of four stitches. The top's bottom edges are 30 cm each; the bottom front's are 28 cm
+/// (its 4 cm dart, legs of 10.2 cm, closed), the bottom back's 30 cm. Both tubes are 120 cm
+/// round at their open ends.
+const WAIST: &str = r#"{"pattern": {"panels": {
+  "top_f": {"vertices": [[-30, 0], [0, 0], [30, 0], [30, 40], [-30, 40]],
+            "edges": [{"endpoints": [0, 1]}, {"endpoints": [1, 2]}, {"endpoints": [2, 3]}, {"endpoints": [3, 4]}, {"endpoints": [4, 0]}],
+            "translation": [0, 100, 30], "rotation": [0, 0, 0]},
+  "top_b": {"vertices": [[-30, 0], [0, 0], [30, 0], [30, 40], [-30, 40]],
+            "edges": [{"endpoints": [0, 1]}, {"endpoints": [1, 2]}, {"endpoints": [2, 3]}, {"endpoints": [3, 4]}, {"endpoints": [4, 0]}],
+            "translation": [0, 100, -30], "rotation": [0, 180, 0]},
+  "bot_f": {"vertices": [[-30, 0], [30, 0], [30, 40], [2, 40], [0, 30], [-2, 40], [-30, 40]],
+            "edges": [{"endpoints": [0, 1]}, {"endpoints": [1, 2]}, {"endpoints": [2, 3]}, {"endpoints": [3, 4]}, {"endpoints": [4, 5]}, {"endpoints": [5, 6]}, {"endpoints": [6, 0]}],
+            "translation": [0, 60, 30], "rotation": [0, 0, 0]},
+  "bot_b": {"vertices": [[-30, 0], [30, 0], [30, 40], [0, 40], [-30, 40]],
+            "edges": [{"endpoints": [0, 1]}, {"endpoints": [1, 2]}, {"endpoints": [2, 3]}, {"endpoints": [3, 4]}, {"endpoints": [4, 0]}],
+            "translation": [0, 60, -30], "rotation": [0, 180, 0]}},
+  "stitches": [[{"panel": "top_f", "edge": 2}, {"panel": "top_b", "edge": 4}],
+               [{"panel": "top_f", "edge": 4}, {"panel": "top_b", "edge": 2}],
+               [{"panel": "bot_f", "edge": 1}, {"panel": "bot_b", "edge": 4}],
+               [{"panel": "bot_f", "edge": 6}, {"panel": "bot_b", "edge": 1}],
+               [{"panel": "bot_f", "edge": 3}, {"panel": "bot_f", "edge": 4}],
+               [{"panel": "top_f", "edge": 0}, {"panel": "bot_f", "edge": 5}],
+               [{"panel": "top_f", "edge": 1}, {"panel": "bot_f", "edge": 2}],
+               [{"panel": "top_b", "edge": 0}, {"panel": "bot_b", "edge": 3}],
+               [{"panel": "top_b", "edge": 1}, {"panel": "bot_b", "edge": 2}]]},
+  "parameters": {}, "parameter_order": [],
+  "properties": {"curvature_coords": "relative", "units_in_meter": 100}}"#;
+
+/// The perimeter of a regular `n`-gon of radius `r`.
+fn ngon(r: f64, n: usize) -> f64 {
+    2.0 * n as f64 * r * (std::f64::consts::PI / n as f64).sin()
+}
+
+#[test]
+fn the_fit_check_finds_the_rings_and_judges_them_on_a_cylinder() {
+    use drapekit::garment::fit_check::{fit_check, FitCheckOptions, RingKind};
+    let pattern = parse(TUBE, Path::new("tube.json")).unwrap();
+    let c = 0.004;
+    let opts = FitCheckOptions::with_clearance(c);
+    // The tube's open ends are its rings (its side seams are vertical): 1.2 m each, at 0.8
+    // and 1.2 m. They give 1.26 m with 5% strain.
+    for (r, fits) in [(0.18, true), (0.2, false)] {
+        let body = cylinder(r, 0.5, 1.5, 64);
+        let check = fit_check(&pattern, &body, &opts).unwrap();
+        assert_eq!(check.rings.len(), 2, "{check:?}");
+        let g = ngon(r, 64);
+        assert_eq!(
+            fits,
+            1.26 >= g + std::f64::consts::TAU * c,
+            "the case is as meant"
+        );
+        for ring in &check.rings {
+            assert_eq!(ring.kind, RingKind::Opening);
+            assert!((ring.length_m - 1.2).abs() < 1e-9, "{ring:?}");
+            assert!(ring.tilt_deg < 1e-6);
+            let z = ring.height_m[0];
+            assert!((z - 0.8).abs() < 1e-9 || (z - 1.2).abs() < 1e-9, "{ring:?}");
+            let [lo, hi] = ring.body_girth_m.unwrap();
+            assert!((lo - g).abs() < 1e-9 && (hi - g).abs() < 1e-9, "{ring:?}");
+            assert_eq!(ring.fits, Some(fits), "r = {r}: {ring:?}");
+            // A cylinder is as wide everywhere.
+            assert_eq!(ring.narrow_enough_above_m, None);
+            assert_eq!(ring.narrow_enough_below_m, None);
+        }
+        assert_eq!(check.too_short, if fits { 0 } else { 2 });
+    }
+}
+
+#[test]
+fn the_fit_check_measures_a_seam_ring_with_its_dart_closed_on_a_cone() {
+    use drapekit::garment::fit_check::{fit_check, FitCheckOptions, RingKind, STEP};
+    let pattern = parse(WAIST, Path::new("waist.json")).unwrap();
+    // A cone narrowing upwards: radius 0.3 m at z = 0.4, 0.1 m at z = 1.6.
+    let (n, c) = (96, 0.003);
+    let r = |z: f64| 0.3 + (0.1 - 0.3) * (z - 0.4) / 1.2;
+    let body = frustum(r(0.4), r(1.6), 0.4, 1.6, n);
+    let check = fit_check(&pattern, &body, &FitCheckOptions::with_clearance(c)).unwrap();
+    assert_eq!(check.rings.len(), 3, "{check:?}");
+    let seam: Vec<_> = check
+        .rings
+        .iter()
+        .filter(|r| r.kind == RingKind::Seam)
+        .collect();
+    assert_eq!(seam.len(), 1, "{check:?}");
+    let waist = seam[0];
+    // Each stitch by its shorter side, the dart's legs not counted: 2 x 0.28 + 2 x 0.30.
+    assert!((waist.length_m - 1.16).abs() < 1e-9, "{waist:?}");
+    assert_eq!(waist.edges.len(), 4);
+    assert!((waist.height_m[0] - 1.0).abs() < 1e-9 && (waist.height_m[1] - 1.0).abs() < 1e-9);
+    let extra = std::f64::consts::TAU * c;
+    let available = 1.16 * 1.05;
+    let g = ngon(r(1.0), n);
+    assert!((waist.body_girth_m.unwrap()[0] - g).abs() < 1e-9);
+    assert!(g + extra > available, "the case is as meant: {g}");
+    assert_eq!(waist.fits, Some(false));
+    // The cone is narrow enough from z* up, where ngon(r(z*)) + extra = available; the check
+    // steps up from the ring in STEP.
+    let z_star = 0.4 + (available - extra - ngon(0.3, n)) / (ngon(0.1, n) - ngon(0.3, n)) * 1.2;
+    let expect = 1.0 + ((z_star - 1.0) / STEP).ceil() * STEP;
+    let above = waist.narrow_enough_above_m.unwrap();
+    assert!(
+        (above - expect).abs() < 1e-9,
+        "{above} against {expect} (z* {z_star})"
+    );
+    assert_eq!(waist.narrow_enough_below_m, None, "wider all the way down");
+    // The open ends, 1.2 m at 0.6 m (0.267 m radius: too short) and at 1.4 m (0.133 m: fits).
+    for ring in check.rings.iter().filter(|r| r.kind == RingKind::Opening) {
+        let z = ring.height_m[0];
+        let fits = 1.26 >= ngon(r(z), n) + extra;
+        assert_eq!(ring.fits, Some(fits), "{ring:?}");
+        assert_eq!(fits, (z - 1.4).abs() < 1e-9);
+    }
+    assert_eq!(check.too_short, 2);
+}
+
+#[test]
+fn the_fit_check_flags_dress_pencils_skirt_waist_on_mean_all() {
+    use drapekit::garment::fit_check::{fit_check, FitCheckOptions, RingKind};
+    let Some(root) = common::realdata() else {
+        return;
+    };
+    let read = drapekit::io::read_mesh(
+        &root.join("bodies/mean_all.obj"),
+        &drapekit::io::ReadOptions::default(),
+    )
+    .unwrap();
+    let mut body = read.mesh;
+    drapekit::mesh::prepare::prepare(
+        &mut body,
+        &drapekit::mesh::prepare::PrepareOptions::default(),
+    );
+    drapekit::mesh::transform::change_up(
+        &mut body,
+        drapekit::mesh::transform::Up::Y,
+        drapekit::mesh::transform::Up::Z,
+    );
+    let pattern =
+        drapekit::garment::read(&root.join("patterns/dress_pencil_specification.json")).unwrap();
+    // The garment command's clearance at 1 cm in cotton: 0.3 mm thickness and 1.25 mm.
+    let check = fit_check(&pattern, &body, &FitCheckOptions::with_clearance(0.00155)).unwrap();
+    let waist: Vec<_> = check
+        .rings
+        .iter()
+        .filter(|r| r.kind == RingKind::Seam)
+        .collect();
+    assert_eq!(waist.len(), 1, "{check:?}");
+    let w = waist[0];
+    // The skirt's waist, darts closed: 84.3 cm, placed at 0.78 to 0.84 m, where mean_all is
+    // a metre round; it is 88.5 cm round (84.3 cm and 5%, less the clearance) from 1.05 m up,
+    // and 84.3 cm only at its natural waist, 1.10 to 1.13 m.
+    assert_eq!(w.edges.len(), 9, "{w:?}");
+    assert!((w.length_m - 0.843).abs() < 0.001, "{w:?}");
+    assert!(w.height_m[0] > 0.78 && w.height_m[1] < 0.84, "{w:?}");
+    assert_eq!(w.fits, Some(false), "{w:?}");
+    assert!(w.body_girth_m.unwrap()[0] > 0.98, "{w:?}");
+    let above = w.narrow_enough_above_m.unwrap();
+    assert!((1.0..1.13).contains(&above), "{w:?}");
+    // The hem (with its side vents) goes round the legs.
+    let hem = check
+        .rings
+        .iter()
+        .find(|r| r.edges.contains(&"skirt_front:0".to_string()))
+        .unwrap();
+    assert_eq!(hem.fits, Some(true), "{hem:?}");
 }
