@@ -645,3 +645,149 @@ fn the_fit_check_flags_dress_pencils_skirt_waist_on_mean_all() {
         .unwrap();
     assert_eq!(hem.fits, Some(true), "{hem:?}");
 }
+
+/// The GarmentCode body measurements of `file` (cm): the `key: value` lines under `body:`.
+fn garmentcode_body(file: &Path) -> std::collections::HashMap<String, f64> {
+    let text = std::fs::read_to_string(file).unwrap();
+    text.lines()
+        .filter_map(|l| l.trim().split_once(':'))
+        .filter_map(|(k, v)| Some((k.trim().to_string(), v.trim().parse().ok()?)))
+        .collect()
+}
+
+#[test]
+fn measurements_to_a_fitted_form_to_dress_pencil_on_it() {
+    // The mission's chain: mean_all.yaml -> `fit --measurements` -> a dress form in the
+    // patterns' frame (y up, feet at y = 0, front +z, m) -> `garment` on it.
+    use drapekit::garment::fit_check::RingKind;
+    use drapekit::mesh::slice::{convex_hull, girth, slice};
+    use drapekit::mesh::transform::{change_up, Up};
+    let Some(root) = common::realdata() else {
+        return;
+    };
+    let yaml = root.join("bodies/mean_all.yaml");
+    let m = garmentcode_body(&yaml);
+    let dir = tempfile::tempdir().unwrap();
+    let form_path = dir.path().join("form.obj");
+    let o = common::run(&[
+        "fit",
+        "--measurements",
+        yaml.to_str().unwrap(),
+        "--to-up",
+        "y",
+        "--to-units",
+        "m",
+        "-o",
+        form_path.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{:?}", common::text(&o));
+    let read = drapekit::io::read_mesh(&form_path, &drapekit::io::ReadOptions::default()).unwrap();
+    let mut form = read.mesh;
+    let b = form.bbox().unwrap();
+    // The form stands on the y axis with its front towards +z: the bust's front is further
+    // from the axis than its back is.
+    assert!(b.min.y > 0.5 && b.max.y < m["height"] / 100.0, "{b:?}");
+    change_up(&mut form, Up::Y, Up::Z);
+    // GarmentCode measures the levels down from the neck: waist = height - head_l -
+    // waist_line, hips = waist - hips_line, bust = height - head_l - vert_bust_line.
+    let neck = m["height"] - m["head_l"];
+    let waist_h = (neck - m["waist_line"]) / 100.0;
+    let hip_h = waist_h - m["hips_line"] / 100.0;
+    let bust_h = (neck - m["vert_bust_line"]) / 100.0;
+    // The fit's documented accuracy: each given girth within 0.02% at its level.
+    for (h, key) in [(waist_h, "waist"), (hip_h, "hips"), (bust_h, "bust")] {
+        let loops = slice(&form, h);
+        assert_eq!(loops.len(), 1, "{key} at {h} m");
+        let g = girth(&loops[0].xy());
+        let want = m[key] / 100.0;
+        assert!(
+            (g / want - 1.0).abs() < 2e-4,
+            "{key} at {h} m: {g} m, asked {want} m"
+        );
+    }
+    let front = slice(&form, bust_h)[0].xy();
+    let (ymin, ymax) = front
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+            (a.min(p.y), b.max(p.y))
+        });
+    assert!(
+        -ymin > ymax,
+        "drapekit's frame: the front (pattern +z) is -y: {ymin} {ymax}"
+    );
+
+    // dress_pencil's panels as placed: none inside the form, and at the bust and the waist
+    // they surround its section.
+    let pattern_path = root.join("patterns/dress_pencil_specification.json");
+    let pattern = drapekit::garment::read(&pattern_path).unwrap();
+    let mut settings = GarmentSettings::default();
+    settings.assemble.spacing = 0.03;
+    let (world, _, _) = garment_world(&pattern, form.clone(), &settings).unwrap();
+    let c = &world.colliders[0];
+    assert!(c.closed);
+    let inside = world
+        .state
+        .x
+        .iter()
+        .filter(|p| drapekit::sim::inside(c, p))
+        .count();
+    assert_eq!(inside, 0);
+    for h in [bust_h, waist_h] {
+        let near: Vec<drapekit::math::Point2> = world
+            .state
+            .x
+            .iter()
+            .filter(|p| (p.z - h).abs() < 0.03)
+            .map(|p| drapekit::math::Point2::new(p.x, p.y))
+            .collect();
+        let hull = convex_hull(&near);
+        for q in slice(&form, h)[0].xy() {
+            assert!(
+                drapekit::geom::contains(&hull, &q),
+                "at {h} m: {q} outside the panels"
+            );
+        }
+    }
+
+    // The garment on the form: a short coarse run, and its fit check.
+    let out = dir.path().join("out");
+    let report = dir.path().join("r.json");
+    let o = common::run(&[
+        "garment",
+        pattern_path.to_str().unwrap(),
+        "--body",
+        form_path.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--spacing",
+        "0.03",
+        "--sew-max",
+        "0.2",
+        "--settle-max",
+        "0.1",
+        "--report",
+        report.to_str().unwrap(),
+    ]);
+    let (stdout, stderr) = common::text(&o);
+    assert!(o.status.success(), "{stdout}\n{stderr}");
+    assert!(
+        stderr.contains("fit check"),
+        "warned before the drape: {stderr}"
+    );
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    let rings = r["fit_check"]["rings"].as_array().unwrap();
+    let seams: Vec<&serde_json::Value> = rings
+        .iter()
+        .filter(|r| r["kind"] == serde_json::json!(RingKind::Seam))
+        .collect();
+    assert_eq!(seams.len(), 1, "{rings:?}");
+    // The skirt's waist is placed at the form's hips, which are the hips' measure round: too
+    // short there, and narrow enough only above the hips and no higher than the waist level,
+    // where the form is the waist's measure round.
+    let w = seams[0];
+    assert_eq!(w["fits"], serde_json::json!(false), "{w}");
+    assert!((w["length_m"].as_f64().unwrap() - m["waist"] / 100.0).abs() < 1e-3);
+    let above = w["narrow_enough_above_m"].as_f64().unwrap();
+    assert!(above > hip_h && above <= waist_h + 0.005, "{above} m: {w}");
+}
