@@ -280,6 +280,13 @@ fn the_garment_command_reports_a_tube_on_a_cylinder() {
     assert!(g["self_crossing_edges"].as_u64().unwrap() <= 10, "{g}");
     assert!(r["body_closed"].as_bool().unwrap());
     assert!(r["self_contact"]["candidates"].is_u64());
+    // The fit check, before the drape: the tube's two open ends, 1.2 m round a column they
+    // fit, and no warning.
+    let fit = &r["fit_check"];
+    assert_eq!(fit["rings"].as_array().unwrap().len(), 2, "{fit}");
+    assert_eq!(fit["too_short"], 0, "{fit}");
+    assert!(fit["rings"][0]["judged"].as_bool().unwrap(), "{fit}");
+    assert!(!stderr.contains("fit check"), "{stderr}");
     // The verdict's moving fraction is the drape's own last frame.
     let moving = r["moving_fraction"].as_f64().unwrap();
     assert_eq!(Some(moving), r["drape"]["moving_fraction"].as_f64(), "{r}");
