@@ -26,8 +26,15 @@ const TUBE: &str = r#"{"pattern": {"panels": {
 
 /// A closed cylinder about the z axis (drapekit's frame) of radius `r` from z0 to z1.
 fn cylinder(r: f64, z0: f64, z1: f64, n: usize) -> TriMesh {
+    frustum(r, r, z0, z1, n)
+}
+
+/// A closed frustum about the z axis: `n`-gons of radius `r0` at z0 and `r1` at z1. Its
+/// section at z is the `n`-gon of radius `r0 + (r1 - r0) (z - z0) / (z1 - z0)`, of perimeter
+/// `2 n r sin(pi / n)` (each side face is a planar trapezoid).
+fn frustum(r0: f64, r1: f64, z0: f64, z1: f64, n: usize) -> TriMesh {
     let mut p = Vec::new();
-    for &z in &[z0, z1] {
+    for &(r, z) in &[(r0, z0), (r1, z1)] {
         for k in 0..n {
             let a = std::f64::consts::TAU * k as f64 / n as f64;
             p.push(Point3::new(r * a.cos(), r * a.sin(), z));
@@ -273,6 +280,13 @@ fn the_garment_command_reports_a_tube_on_a_cylinder() {
     assert!(g["self_crossing_edges"].as_u64().unwrap() <= 10, "{g}");
     assert!(r["body_closed"].as_bool().unwrap());
     assert!(r["self_contact"]["candidates"].is_u64());
+    // The fit check, before the drape: the tube's two open ends, 1.2 m round a column they
+    // fit, and no warning.
+    let fit = &r["fit_check"];
+    assert_eq!(fit["rings"].as_array().unwrap().len(), 2, "{fit}");
+    assert_eq!(fit["too_short"], 0, "{fit}");
+    assert!(fit["rings"][0]["judged"].as_bool().unwrap(), "{fit}");
+    assert!(!stderr.contains("fit check"), "{stderr}");
     // The verdict's moving fraction is the drape's own last frame.
     let moving = r["moving_fraction"].as_f64().unwrap();
     assert_eq!(Some(moving), r["drape"]["moving_fraction"].as_f64(), "{r}");
@@ -470,4 +484,317 @@ fn dress_pencil_gathers_its_bodice_into_the_skirt() {
     let total: f64 = g[2..].iter().map(|s| s.lengths_mm[1]).sum();
     assert!((total - 843.0).abs() < 1.0, "the skirt's waist: {total} mm");
     assert!(drapekit::garment::gathers::gathers(&read("shirt_mean")).is_empty());
+}
+
+/// A top tube (y 100 to 140 cm) sewn to a bottom tube (y 60 to 100 cm) at y = 100: a waist
+/// seam of four stitches. The top's bottom edges are 30 cm each; the bottom front's are 28 cm
+/// (its 4 cm dart, legs of 10.2 cm, closed), the bottom back's 30 cm. Both tubes are 120 cm
+/// round at their open ends.
+const WAIST: &str = r#"{"pattern": {"panels": {
+  "top_f": {"vertices": [[-30, 0], [0, 0], [30, 0], [30, 40], [-30, 40]],
+            "edges": [{"endpoints": [0, 1]}, {"endpoints": [1, 2]}, {"endpoints": [2, 3]}, {"endpoints": [3, 4]}, {"endpoints": [4, 0]}],
+            "translation": [0, 100, 30], "rotation": [0, 0, 0]},
+  "top_b": {"vertices": [[-30, 0], [0, 0], [30, 0], [30, 40], [-30, 40]],
+            "edges": [{"endpoints": [0, 1]}, {"endpoints": [1, 2]}, {"endpoints": [2, 3]}, {"endpoints": [3, 4]}, {"endpoints": [4, 0]}],
+            "translation": [0, 100, -30], "rotation": [0, 180, 0]},
+  "bot_f": {"vertices": [[-30, 0], [30, 0], [30, 40], [2, 40], [0, 30], [-2, 40], [-30, 40]],
+            "edges": [{"endpoints": [0, 1]}, {"endpoints": [1, 2]}, {"endpoints": [2, 3]}, {"endpoints": [3, 4]}, {"endpoints": [4, 5]}, {"endpoints": [5, 6]}, {"endpoints": [6, 0]}],
+            "translation": [0, 60, 30], "rotation": [0, 0, 0]},
+  "bot_b": {"vertices": [[-30, 0], [30, 0], [30, 40], [0, 40], [-30, 40]],
+            "edges": [{"endpoints": [0, 1]}, {"endpoints": [1, 2]}, {"endpoints": [2, 3]}, {"endpoints": [3, 4]}, {"endpoints": [4, 0]}],
+            "translation": [0, 60, -30], "rotation": [0, 180, 0]}},
+  "stitches": [[{"panel": "top_f", "edge": 2}, {"panel": "top_b", "edge": 4}],
+               [{"panel": "top_f", "edge": 4}, {"panel": "top_b", "edge": 2}],
+               [{"panel": "bot_f", "edge": 1}, {"panel": "bot_b", "edge": 4}],
+               [{"panel": "bot_f", "edge": 6}, {"panel": "bot_b", "edge": 1}],
+               [{"panel": "bot_f", "edge": 3}, {"panel": "bot_f", "edge": 4}],
+               [{"panel": "top_f", "edge": 0}, {"panel": "bot_f", "edge": 5}],
+               [{"panel": "top_f", "edge": 1}, {"panel": "bot_f", "edge": 2}],
+               [{"panel": "top_b", "edge": 0}, {"panel": "bot_b", "edge": 3}],
+               [{"panel": "top_b", "edge": 1}, {"panel": "bot_b", "edge": 2}]]},
+  "parameters": {}, "parameter_order": [],
+  "properties": {"curvature_coords": "relative", "units_in_meter": 100}}"#;
+
+/// The perimeter of a regular `n`-gon of radius `r`.
+fn ngon(r: f64, n: usize) -> f64 {
+    2.0 * n as f64 * r * (std::f64::consts::PI / n as f64).sin()
+}
+
+#[test]
+fn the_fit_check_finds_the_rings_and_judges_them_on_a_cylinder() {
+    use drapekit::garment::fit_check::{fit_check, FitCheckOptions, RingKind};
+    let pattern = parse(TUBE, Path::new("tube.json")).unwrap();
+    let c = 0.004;
+    let opts = FitCheckOptions::with_clearance(c);
+    // The tube's open ends are its rings (its side seams are vertical): 1.2 m each, at 0.8
+    // and 1.2 m. They give 1.26 m with 5% strain.
+    for (r, fits) in [(0.18, true), (0.2, false)] {
+        let body = cylinder(r, 0.5, 1.5, 64);
+        let check = fit_check(&pattern, &body, &opts).unwrap();
+        assert_eq!(check.rings.len(), 2, "{check:?}");
+        let g = ngon(r, 64);
+        assert_eq!(
+            fits,
+            1.26 >= g + std::f64::consts::TAU * c,
+            "the case is as meant"
+        );
+        for ring in &check.rings {
+            assert_eq!(ring.kind, RingKind::Opening);
+            assert!((ring.length_m - 1.2).abs() < 1e-9, "{ring:?}");
+            assert!(ring.tilt_deg < 1e-6);
+            let z = ring.height_m[0];
+            assert!((z - 0.8).abs() < 1e-9 || (z - 1.2).abs() < 1e-9, "{ring:?}");
+            let [lo, hi] = ring.body_girth_m.unwrap();
+            assert!((lo - g).abs() < 1e-9 && (hi - g).abs() < 1e-9, "{ring:?}");
+            assert_eq!(ring.fits, Some(fits), "r = {r}: {ring:?}");
+            // A cylinder is as wide everywhere.
+            assert_eq!(ring.narrow_enough_above_m, None);
+            assert_eq!(ring.narrow_enough_below_m, None);
+        }
+        assert_eq!(check.too_short, if fits { 0 } else { 2 });
+    }
+}
+
+#[test]
+fn the_fit_check_measures_a_seam_ring_with_its_dart_closed_on_a_cone() {
+    use drapekit::garment::fit_check::{fit_check, FitCheckOptions, RingKind, STEP};
+    let pattern = parse(WAIST, Path::new("waist.json")).unwrap();
+    // A cone narrowing upwards: radius 0.3 m at z = 0.4, 0.1 m at z = 1.6.
+    let (n, c) = (96, 0.003);
+    let r = |z: f64| 0.3 + (0.1 - 0.3) * (z - 0.4) / 1.2;
+    let body = frustum(r(0.4), r(1.6), 0.4, 1.6, n);
+    let check = fit_check(&pattern, &body, &FitCheckOptions::with_clearance(c)).unwrap();
+    assert_eq!(check.rings.len(), 3, "{check:?}");
+    let seam: Vec<_> = check
+        .rings
+        .iter()
+        .filter(|r| r.kind == RingKind::Seam)
+        .collect();
+    assert_eq!(seam.len(), 1, "{check:?}");
+    let waist = seam[0];
+    // Each stitch by its shorter side, the dart's legs not counted: 2 x 0.28 + 2 x 0.30.
+    assert!((waist.length_m - 1.16).abs() < 1e-9, "{waist:?}");
+    assert_eq!(waist.edges.len(), 4);
+    assert!((waist.height_m[0] - 1.0).abs() < 1e-9 && (waist.height_m[1] - 1.0).abs() < 1e-9);
+    let extra = std::f64::consts::TAU * c;
+    let available = 1.16 * 1.05;
+    let g = ngon(r(1.0), n);
+    assert!((waist.body_girth_m.unwrap()[0] - g).abs() < 1e-9);
+    assert!(g + extra > available, "the case is as meant: {g}");
+    assert_eq!(waist.fits, Some(false));
+    // The cone is narrow enough from z* up, where ngon(r(z*)) + extra = available; the check
+    // steps up from the ring in STEP.
+    let z_star = 0.4 + (available - extra - ngon(0.3, n)) / (ngon(0.1, n) - ngon(0.3, n)) * 1.2;
+    let expect = 1.0 + ((z_star - 1.0) / STEP).ceil() * STEP;
+    let above = waist.narrow_enough_above_m.unwrap();
+    assert!(
+        (above - expect).abs() < 1e-9,
+        "{above} against {expect} (z* {z_star})"
+    );
+    assert_eq!(waist.narrow_enough_below_m, None, "wider all the way down");
+    // The open ends, 1.2 m at 0.6 m (0.267 m radius: too short) and at 1.4 m (0.133 m: fits).
+    for ring in check.rings.iter().filter(|r| r.kind == RingKind::Opening) {
+        let z = ring.height_m[0];
+        let fits = 1.26 >= ngon(r(z), n) + extra;
+        assert_eq!(ring.fits, Some(fits), "{ring:?}");
+        assert_eq!(fits, (z - 1.4).abs() < 1e-9);
+    }
+    assert_eq!(check.too_short, 2);
+}
+
+#[test]
+fn the_fit_check_flags_dress_pencils_skirt_waist_on_mean_all() {
+    use drapekit::garment::fit_check::{fit_check, FitCheckOptions, RingKind};
+    let Some(root) = common::realdata() else {
+        return;
+    };
+    let read = drapekit::io::read_mesh(
+        &root.join("bodies/mean_all.obj"),
+        &drapekit::io::ReadOptions::default(),
+    )
+    .unwrap();
+    let mut body = read.mesh;
+    drapekit::mesh::prepare::prepare(
+        &mut body,
+        &drapekit::mesh::prepare::PrepareOptions::default(),
+    );
+    drapekit::mesh::transform::change_up(
+        &mut body,
+        drapekit::mesh::transform::Up::Y,
+        drapekit::mesh::transform::Up::Z,
+    );
+    let pattern =
+        drapekit::garment::read(&root.join("patterns/dress_pencil_specification.json")).unwrap();
+    // The garment command's clearance at 1 cm in cotton: 0.3 mm thickness and 1.25 mm.
+    let check = fit_check(&pattern, &body, &FitCheckOptions::with_clearance(0.00155)).unwrap();
+    let waist: Vec<_> = check
+        .rings
+        .iter()
+        .filter(|r| r.kind == RingKind::Seam)
+        .collect();
+    assert_eq!(waist.len(), 1, "{check:?}");
+    let w = waist[0];
+    // The skirt's waist, darts closed: 84.3 cm, placed at 0.78 to 0.84 m, where mean_all is
+    // a metre round; it is 88.5 cm round (84.3 cm and 5%, less the clearance) from 1.05 m up,
+    // and 84.3 cm only at its natural waist, 1.10 to 1.13 m.
+    assert_eq!(w.edges.len(), 9, "{w:?}");
+    assert!((w.length_m - 0.843).abs() < 0.001, "{w:?}");
+    assert!(w.height_m[0] > 0.78 && w.height_m[1] < 0.84, "{w:?}");
+    assert_eq!(w.fits, Some(false), "{w:?}");
+    assert!(w.body_girth_m.unwrap()[0] > 0.98, "{w:?}");
+    let above = w.narrow_enough_above_m.unwrap();
+    assert!((1.0..1.13).contains(&above), "{w:?}");
+    // The hem (with its side vents) goes round the legs.
+    let hem = check
+        .rings
+        .iter()
+        .find(|r| r.edges.contains(&"skirt_front:0".to_string()))
+        .unwrap();
+    assert_eq!(hem.fits, Some(true), "{hem:?}");
+}
+
+/// The GarmentCode body measurements of `file` (cm): the `key: value` lines under `body:`.
+fn garmentcode_body(file: &Path) -> std::collections::HashMap<String, f64> {
+    let text = std::fs::read_to_string(file).unwrap();
+    text.lines()
+        .filter_map(|l| l.trim().split_once(':'))
+        .filter_map(|(k, v)| Some((k.trim().to_string(), v.trim().parse().ok()?)))
+        .collect()
+}
+
+#[test]
+fn measurements_to_a_fitted_form_to_dress_pencil_on_it() {
+    // The mission's chain: mean_all.yaml -> `fit --measurements` -> a dress form in the
+    // patterns' frame (y up, feet at y = 0, front +z, m) -> `garment` on it.
+    use drapekit::garment::fit_check::RingKind;
+    use drapekit::mesh::slice::{convex_hull, girth, slice};
+    use drapekit::mesh::transform::{change_up, Up};
+    let Some(root) = common::realdata() else {
+        return;
+    };
+    let yaml = root.join("bodies/mean_all.yaml");
+    let m = garmentcode_body(&yaml);
+    let dir = tempfile::tempdir().unwrap();
+    let form_path = dir.path().join("form.obj");
+    let o = common::run(&[
+        "fit",
+        "--measurements",
+        yaml.to_str().unwrap(),
+        "--to-up",
+        "y",
+        "--to-units",
+        "m",
+        "-o",
+        form_path.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{:?}", common::text(&o));
+    let read = drapekit::io::read_mesh(&form_path, &drapekit::io::ReadOptions::default()).unwrap();
+    let mut form = read.mesh;
+    let b = form.bbox().unwrap();
+    // The form stands on the y axis with its front towards +z: the bust's front is further
+    // from the axis than its back is.
+    assert!(b.min.y > 0.5 && b.max.y < m["height"] / 100.0, "{b:?}");
+    change_up(&mut form, Up::Y, Up::Z);
+    // GarmentCode measures the levels down from the neck: waist = height - head_l -
+    // waist_line, hips = waist - hips_line, bust = height - head_l - vert_bust_line.
+    let neck = m["height"] - m["head_l"];
+    let waist_h = (neck - m["waist_line"]) / 100.0;
+    let hip_h = waist_h - m["hips_line"] / 100.0;
+    let bust_h = (neck - m["vert_bust_line"]) / 100.0;
+    // The fit's documented accuracy: each given girth within 0.02% at its level.
+    for (h, key) in [(waist_h, "waist"), (hip_h, "hips"), (bust_h, "bust")] {
+        let loops = slice(&form, h);
+        assert_eq!(loops.len(), 1, "{key} at {h} m");
+        let g = girth(&loops[0].xy());
+        let want = m[key] / 100.0;
+        assert!(
+            (g / want - 1.0).abs() < 2e-4,
+            "{key} at {h} m: {g} m, asked {want} m"
+        );
+    }
+    let front = slice(&form, bust_h)[0].xy();
+    let (ymin, ymax) = front
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+            (a.min(p.y), b.max(p.y))
+        });
+    assert!(
+        -ymin > ymax,
+        "drapekit's frame: the front (pattern +z) is -y: {ymin} {ymax}"
+    );
+
+    // dress_pencil's panels as placed: none inside the form, and at the bust and the waist
+    // they surround its section.
+    let pattern_path = root.join("patterns/dress_pencil_specification.json");
+    let pattern = drapekit::garment::read(&pattern_path).unwrap();
+    let mut settings = GarmentSettings::default();
+    settings.assemble.spacing = 0.03;
+    let (world, _, _) = garment_world(&pattern, form.clone(), &settings).unwrap();
+    let c = &world.colliders[0];
+    assert!(c.closed);
+    let inside = world
+        .state
+        .x
+        .iter()
+        .filter(|p| drapekit::sim::inside(c, p))
+        .count();
+    assert_eq!(inside, 0);
+    for h in [bust_h, waist_h] {
+        let near: Vec<drapekit::math::Point2> = world
+            .state
+            .x
+            .iter()
+            .filter(|p| (p.z - h).abs() < 0.03)
+            .map(|p| drapekit::math::Point2::new(p.x, p.y))
+            .collect();
+        let hull = convex_hull(&near);
+        for q in slice(&form, h)[0].xy() {
+            assert!(
+                drapekit::geom::contains(&hull, &q),
+                "at {h} m: {q} outside the panels"
+            );
+        }
+    }
+
+    // The garment on the form: a short coarse run, and its fit check.
+    let out = dir.path().join("out");
+    let report = dir.path().join("r.json");
+    let o = common::run(&[
+        "garment",
+        pattern_path.to_str().unwrap(),
+        "--body",
+        form_path.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--spacing",
+        "0.03",
+        "--sew-max",
+        "0.2",
+        "--settle-max",
+        "0.1",
+        "--report",
+        report.to_str().unwrap(),
+    ]);
+    let (stdout, stderr) = common::text(&o);
+    assert!(o.status.success(), "{stdout}\n{stderr}");
+    assert!(
+        stderr.contains("fit check"),
+        "warned before the drape: {stderr}"
+    );
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    let rings = r["fit_check"]["rings"].as_array().unwrap();
+    let seams: Vec<&serde_json::Value> = rings
+        .iter()
+        .filter(|r| r["kind"] == serde_json::json!(RingKind::Seam))
+        .collect();
+    assert_eq!(seams.len(), 1, "{rings:?}");
+    // The skirt's waist is placed at the form's hips, which are the hips' measure round: too
+    // short there, and narrow enough only above the hips and no higher than the waist level,
+    // where the form is the waist's measure round.
+    let w = seams[0];
+    assert_eq!(w["fits"], serde_json::json!(false), "{w}");
+    assert!((w["length_m"].as_f64().unwrap() - m["waist"] / 100.0).abs() < 1e-3);
+    let above = w["narrow_enough_above_m"].as_f64().unwrap();
+    assert!(above > hip_h && above <= waist_h + 0.005, "{above} m: {w}");
 }

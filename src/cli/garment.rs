@@ -4,6 +4,7 @@
 use crate::cloth::fabric::Fabric;
 use crate::collide::cloth::{SelfCollisionOptions, SelfStats};
 use crate::garment::drape::{self as gd, GarmentSettings, StageReport};
+use crate::garment::fit_check::{fit_check, FitCheck, FitCheckOptions, Ring};
 use crate::garment::measure::{self, Measures, Thresholds};
 use crate::io::{self, ReadOptions};
 use crate::mesh::prepare::{prepare, PrepareOptions};
@@ -126,6 +127,9 @@ pub struct GarmentReport {
     pub open_seams: Vec<measure::OpenSeam>,
     /// The stitches that gather a longer edge into a shorter one (`garment::gathers`).
     pub gathers: Vec<crate::garment::gathers::Gather>,
+    /// Each closed ring of the pattern against the body's girth where it sits, checked before
+    /// the simulation (`garment::fit_check`).
+    pub fit_check: FitCheck,
     /// The limits of the verdict.
     pub thresholds: Thresholds,
     /// `pass`, or `fail`.
@@ -425,6 +429,14 @@ pub fn run(args: GarmentArgs) -> anyhow::Result<()> {
             args.output.display()
         );
     }
+    let clearance = settings.assemble.fabric.thickness
+        + settings
+            .body_clearance
+            .unwrap_or(gd::AUTO_CLEARANCE * settings.assemble.spacing);
+    let fit = fit_check(&pattern, &body, &FitCheckOptions::with_clearance(clearance))?;
+    for r in fit.rings.iter().filter(|r| r.fits == Some(false)) {
+        eprintln!("warning: {}", too_short(r));
+    }
     let progress = |t: f64| {
         if super::interactive() {
             eprint!("\rsewing: {t:.2} s simulated");
@@ -535,6 +547,7 @@ pub fn run(args: GarmentArgs) -> anyhow::Result<()> {
             thresholds.seam_gap_max_mm,
         ),
         gathers: crate::garment::gathers::gathers(&pattern),
+        fit_check: fit,
         thresholds,
         verdict: if failed.is_empty() { "pass" } else { "fail" }.into(),
         failed,
@@ -548,6 +561,33 @@ pub fn run(args: GarmentArgs) -> anyhow::Result<()> {
         &args.output,
         args.json,
         print_summary,
+    )
+}
+
+/// One line on a ring too short for the body where it sits.
+fn too_short(r: &Ring) -> String {
+    let cm = |m: f64| format!("{:.1} cm", m * 100.0);
+    let at = |z: Option<f64>| z.map_or("nowhere".to_string(), |z| format!("at {z:.3} m"));
+    let g = r.body_girth_m.unwrap_or([0.0; 2]);
+    format!(
+        "fit check: the {} ring {} is {} long ({} with {:.0}% strain) at {:.3}-{:.3} m, where the \
+         body is {}-{} round ({} needed with the clearance); the body is narrow enough {} above, \
+         {} below",
+        match r.kind {
+            crate::garment::fit_check::RingKind::Seam => "seam",
+            crate::garment::fit_check::RingKind::Opening => "opening",
+        },
+        r.edges.join(" "),
+        cm(r.length_m),
+        cm(r.available_m),
+        (r.available_m / r.length_m - 1.0) * 100.0,
+        r.height_m[0],
+        r.height_m[1],
+        cm(g[0]),
+        cm(g[1]),
+        cm(r.needed_m.unwrap_or(0.0)),
+        at(r.narrow_enough_above_m),
+        at(r.narrow_enough_below_m)
     )
 }
 
@@ -594,6 +634,16 @@ fn print_summary(r: &GarmentReport) {
             ""
         }
     );
+    let f = &r.fit_check;
+    println!(
+        "  fit check (before the drape): {} rings, {} judged, {} too short for the body",
+        f.rings.len(),
+        f.rings.iter().filter(|r| r.judged).count(),
+        f.too_short
+    );
+    for ring in f.rings.iter().filter(|r| r.fits == Some(false)) {
+        println!("    {}", too_short(ring));
+    }
     println!("  verdict: {} in {:.1} s", r.verdict, r.wall_seconds);
     for f in &r.failed {
         println!("    failed: {f}");

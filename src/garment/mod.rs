@@ -5,12 +5,14 @@
 //! and stitches that join pairs of edges. [`spec`] reads a file into a typed [`Pattern`] and
 //! reports every problem it finds; [`curve`] evaluates, measures and samples edge curves;
 //! [`sample`] samples the outlines with the two edges of every stitch paired point to point;
-//! [`gathers`] lists the stitches that join edges of different lengths.
+//! [`gathers`] lists the stitches that join edges of different lengths; [`fit_check`] compares
+//! each closed ring of the sewn garment with the body's girth where it sits, before a drape.
 
 pub mod assemble;
 pub mod curve;
 pub mod drape;
 pub mod facing;
+pub mod fit_check;
 pub mod gathers;
 pub mod lift;
 pub mod measure;
