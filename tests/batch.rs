@@ -132,6 +132,8 @@ fn bad_plans_name_the_file_and_every_key() {
         err.contains("key 'garment[1].body_object'") && err.contains("has no [[object]]"),
         "{err}"
     );
+    // The missing scene once, by its own key (not again as a scene that cannot be read).
+    assert!(!err.contains("key 'garment[0].body_object'"), "{err}");
 }
 
 /// `batch plan PLAN` with a time limit (a hang or a quadratic check is a failure).

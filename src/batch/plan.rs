@@ -912,7 +912,8 @@ impl Plan {
                 }
                 GarmentKind::Scene { file, body_object } => {
                     let needs = jobs.iter().any(|j| j.body.is_some() || j.size.is_some());
-                    if needs {
+                    // A scene that is not a file is reported once, by its own key.
+                    if needs && file.is_file() {
                         if let Err(m) = scene_object(file, body_object.as_deref()) {
                             p.add(format!("{key}.body_object"), m);
                         }
