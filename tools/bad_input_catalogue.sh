@@ -484,7 +484,7 @@ interrupt_case() { # interrupt_case SIGNAL
     if diff -rq ref out >/dev/null 2>&1; then same="yes"; fi
     row=$((row + 1))
     printf '| %d | %s | %s | `%s` | %d | %s |\n' "$row" "$O" \
-        "$(clean "SIG$sig during the run; checked: $temps temporary files, $frames finished frames kept; --resume gives the uninterrupted run's files byte for byte: $same")" \
+        "$(clean "SIG$sig during the run; checked: temporary files: $temps, finished frames kept: $frames; --resume gives the uninterrupted run's files byte for byte: $same")" \
         "drapekit drape a/drop.toml -o out --glb; kill -$sig after the first frame; then --resume" \
         "$code" "$(clean "$(first_line "$d/.err")")" >>"$rows"
 }
