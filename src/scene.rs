@@ -488,12 +488,45 @@ pub fn read(path: &Path) -> Result<Scene, SceneError> {
     parse(&text, path)
 }
 
+/// A TOML error of `text` for a message: its place and what is wrong on the first line
+/// (`line 10, column 1: unknown field ...`), then the line quoted with a mark under the place.
+/// (The `toml` crate's own text starts with a line that says only where.)
+pub fn toml_message(text: &str, e: &toml::de::Error) -> String {
+    let what = e.message().trim_end();
+    let Some(span) = e.span() else {
+        return what.to_string();
+    };
+    let mut at = span.start.min(text.len());
+    while !text.is_char_boundary(at) {
+        at -= 1;
+    }
+    let start = text[..at].rfind('\n').map_or(0, |i| i + 1);
+    let line = text[..at].matches('\n').count() + 1;
+    let column = text[start..at].chars().count() + 1;
+    let quoted: Vec<String> = e
+        .to_string()
+        .lines()
+        .skip(1)
+        .take_while(|l| {
+            l.trim_start()
+                .starts_with(|c: char| c == '|' || c.is_ascii_digit())
+        })
+        .map(str::to_string)
+        .collect();
+    let mut m = format!("line {line}, column {column}: {what}");
+    for q in quoted {
+        m.push('\n');
+        m.push_str(&q);
+    }
+    m
+}
+
 /// Parses and validates a scene file's `text`, as [`read`]: `path` names it in errors, and its
 /// folder is where the objects' meshes are looked for.
 pub fn parse(text: &str, path: &Path) -> Result<Scene, SceneError> {
     let f: File = toml::from_str(text).map_err(|e| SceneError::Toml {
         path: path.to_path_buf(),
-        message: e.to_string().trim_end().to_string(),
+        message: toml_message(text, &e),
     })?;
     let problems = std::cell::RefCell::new(Vec::<(String, String)>::new());
     // Records a problem with a key; validation goes on with a stand-in value.
@@ -629,7 +662,12 @@ pub fn parse(text: &str, path: &Path) -> Result<Scene, SceneError> {
             );
         }
     }
-    if let Some(r) = f.solver.chebyshev {
+    // (With another integrator the key is refused below, as not its own.)
+    if let Some(r) = f
+        .solver
+        .chebyshev
+        .filter(|_| integrator == Integrator::ProjectiveDynamics)
+    {
         if solver.anderson > 0 {
             bad(
                 "solver.chebyshev",
@@ -644,27 +682,38 @@ pub fn parse(text: &str, path: &Path) -> Result<Scene, SceneError> {
             );
         }
     }
-    let explicit_only = [
+    // Each key given for another integrator than the scene's, by its own name.
+    let (implicit, projective) = (Integrator::ImplicitEuler, Integrator::ProjectiveDynamics);
+    let s = &f.solver;
+    let owned = [
         (
             "solver.newton_iterations",
-            f.solver.newton_iterations.is_some()
-                || f.solver.cg_tolerance.is_some()
-                || f.solver.cg_max_iterations.is_some(),
-            Integrator::ImplicitEuler,
+            s.newton_iterations.is_some(),
+            implicit,
+        ),
+        ("solver.cg_tolerance", s.cg_tolerance.is_some(), implicit),
+        (
+            "solver.cg_max_iterations",
+            s.cg_max_iterations.is_some(),
+            implicit,
+        ),
+        ("solver.iterations", s.iterations.is_some(), projective),
+        ("solver.chebyshev", s.chebyshev.is_some(), projective),
+        ("solver.anderson", s.anderson.is_some(), projective),
+        ("solver.strain_band", s.strain_band.is_some(), projective),
+        (
+            "solver.strain_tolerance",
+            s.strain_tolerance.is_some(),
+            projective,
         ),
         (
-            "solver.iterations",
-            f.solver.iterations.is_some()
-                || f.solver.chebyshev.is_some()
-                || f.solver.anderson.is_some()
-                || f.solver.strain_band.is_some()
-                || f.solver.strain_tolerance.is_some()
-                || f.solver.max_iterations.is_some()
-                || f.solver.corrections.is_some(),
-            Integrator::ProjectiveDynamics,
+            "solver.max_iterations",
+            s.max_iterations.is_some(),
+            projective,
         ),
+        ("solver.corrections", s.corrections.is_some(), projective),
     ];
-    for (key, given, owner) in explicit_only {
+    for (key, given, owner) in owned {
         if given && integrator != owner {
             bad(
                 key,

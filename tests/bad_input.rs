@@ -281,6 +281,8 @@ fn unwritable_output_path() {
         err.contains("cannot write") && err.contains("in.txt/out.ply"),
         "{err}"
     );
+    // The path given, not the temporary file's.
+    assert!(!err.contains(drapekit::io::TEMP_PREFIX), "{err}");
     assert_eq!(listing(dir.path()), vec!["in.txt"]);
 }
 

@@ -71,7 +71,10 @@ fn bad_plans_name_the_file_and_every_key() {
     let o = drapekit().args(["batch", "plan"]).arg(&p).output().unwrap();
     let (_, err) = text(&o);
     assert_eq!(o.status.code(), Some(1));
-    assert!(err.contains("typo.toml") && err.contains("sceen"), "{err}");
+    assert!(
+        err.contains("typo.toml: line 3, column 1: unknown field `sceen`"),
+        "{err}"
+    );
     // Bad values: each problem with its key, all at once.
     let p = small_plan(
         d.path(),
@@ -89,6 +92,21 @@ fn bad_plans_name_the_file_and_every_key() {
         "key 'size[1].name': 's' is given twice",
         "key 'fabric.rough': defined but not listed",
         "key 'fabric.rough.strech': unknown key",
+    ] {
+        assert!(err.contains(needle), "missing {needle:?} in {err}");
+    }
+    // Numbers in messages in short form, never 300 digits.
+    let p = small_plan(
+        d.path(),
+        "\"cotton\"",
+        &[],
+        "dt = -1e300\n[[size]]\nname = \"big\"\nscale = 1e300\n",
+    );
+    let o = drapekit().args(["batch", "plan"]).arg(&p).output().unwrap();
+    let (_, err) = text(&o);
+    for needle in [
+        "key 'size[0].scale': must be a factor from 0.1 to 10, got 1.000e300",
+        "key 'solver.dt': must be a positive number, got -1.000e300",
     ] {
         assert!(err.contains(needle), "missing {needle:?} in {err}");
     }
@@ -114,6 +132,88 @@ fn bad_plans_name_the_file_and_every_key() {
         err.contains("key 'garment[1].body_object'") && err.contains("has no [[object]]"),
         "{err}"
     );
+    // The missing scene once, by its own key (not again as a scene that cannot be read).
+    assert!(!err.contains("key 'garment[0].body_object'"), "{err}");
+}
+
+/// `batch plan PLAN` with a time limit (a hang or a quadratic check is a failure).
+fn plan_within(plan: &Path, limit: std::time::Duration) -> std::process::Output {
+    let mut child = drapekit()
+        .args(["batch", "plan"])
+        .arg(plan)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = std::time::Instant::now();
+    // Read stdout as it comes (the job list can outgrow a pipe's buffer).
+    let mut stdout = child.stdout.take().unwrap();
+    let reader = std::thread::spawn(move || {
+        let mut s = Vec::new();
+        std::io::Read::read_to_end(&mut stdout, &mut s).unwrap();
+        s
+    });
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > limit {
+            child.kill().unwrap();
+            child.wait().unwrap();
+            panic!("batch plan {} still runs after {limit:?}", plan.display());
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let mut o = child.wait_with_output().unwrap();
+    o.stdout = reader.join().unwrap();
+    o
+}
+
+#[test]
+fn job_counts_beyond_the_limit_are_refused_and_long_lists_checked_quickly() {
+    let d = tempfile::tempdir().unwrap();
+    // Refused within the time limit, with `needle` in the message.
+    let refused = |p: &Path, needle: String| {
+        let o = plan_within(p, std::time::Duration::from_secs(30));
+        let err = text(&o).1;
+        assert_eq!(o.status.code(), Some(1), "{err}");
+        assert!(err.contains(&needle), "missing {needle:?} in {err}");
+    };
+    let n = plan::MAX_JOBS;
+    let sizes: String = (0..n)
+        .map(|i| format!("[[size]]\nname = \"s{i}\"\n"))
+        .collect();
+    // The product: 1 garment x 2 fabrics x MAX_JOBS sizes.
+    let p = small_plan(d.path(), "\"cotton\", \"silk\"", &[], &sizes);
+    refused(
+        &p,
+        format!(
+            "key 'garment x body x fabrics x size': 1 x 1 x 2 x {n} is {} jobs: at most {n}",
+            2 * n
+        ),
+    );
+    // A [[job]] list one over the limit.
+    let listed = |count: usize, twice: bool| -> String {
+        let mut s: String = (0..count)
+            .map(|i| format!("[[job]]\ngarment = \"square\"\nsize = \"s{}\"\n", i % n))
+            .collect();
+        if twice {
+            s += "[[job]]\ngarment = \"square\"\nsize = \"s7\"\n";
+        }
+        s
+    };
+    let p = small_plan(d.path(), "", &[], &(sizes.clone() + &listed(n + 1, false)));
+    refused(
+        &p,
+        format!("key 'job': {} [[job]] entries: at most {n}", n + 1),
+    );
+    // A list at the limit with one job twice: found (by a hash set, not pair by pair).
+    let p = small_plan(d.path(), "", &[], &(sizes.clone() + &listed(n - 1, true)));
+    refused(
+        &p,
+        format!("key 'job[{}]': job square.s7 is listed twice", n - 1),
+    );
+    // The same list without the repeat is a plan of MAX_JOBS jobs.
+    let p = small_plan(d.path(), "", &[], &(sizes + &listed(n, false)));
+    let o = plan_within(&p, std::time::Duration::from_secs(30));
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o).1);
 }
 
 #[test]

@@ -874,6 +874,50 @@ fn extremes_of_stiffness_and_step_are_either_stable_or_caught_as_the_estimate_sa
 }
 
 #[test]
+fn the_stability_check_is_a_run_option_on_by_default() {
+    // The probe at 1.25 x the power iteration's step: unstable.
+    let f = stiffness(1e4, 0.5);
+    let dt = 1.25 * power_step(&probe_world(&f, Integrator::Leapfrog));
+    let steps = 300;
+    let run = |stability| {
+        let mut w = probe_world(&f, Integrator::Leapfrog);
+        let mut called = 0;
+        let r = sim::run(
+            &mut w,
+            &SolverSettings::new(Integrator::Leapfrog).with_dt(dt),
+            Stop::Steps(steps),
+            Some(1),
+            &mut |_, _| {
+                called += 1;
+                Ok(false)
+            },
+            &|_| {},
+            sim::Control {
+                stability,
+                ..Default::default()
+            },
+        );
+        (r.map(|_| ()), called, w)
+    };
+    let (r, called, _) = run(sim::StabilityCheck::default());
+    assert!(
+        matches!(r, Err(SimError::Unstable { .. })),
+        "the default checks: {r:?}"
+    );
+    assert!(called < steps, "{called}");
+    // Switched off, the same run goes to its last step, its numbers running away.
+    let (r, called, w) = run(sim::StabilityCheck::Off);
+    assert!(r.is_ok(), "{r:?}");
+    assert_eq!(called, steps);
+    let far = w
+        .state
+        .x
+        .iter()
+        .any(|p| p.iter().any(|c| !c.is_finite() || c.abs() > 1e3));
+    assert!(far, "unchecked, the unstable probe ran away");
+}
+
+#[test]
 fn explicit_euler_needs_damping_and_a_step_below_its_estimate() {
     // Soft, heavily damped: explicit Euler is stable below c / (c^2/4 + w^2), and not above.
     let f = stiffness(1.0, 40.0);
@@ -906,7 +950,17 @@ fn an_unstable_scene_stops_with_advice_and_leaves_nothing_behind() {
         "\n[output]\nframes = 1\nply = true\n",
     );
     let out = dir.join("out");
-    let o = drape_cli(&scene, &out, &[]);
+    // The old debug variable that switched the check off is gone: it changes nothing.
+    let o = common::drapekit()
+        .args([
+            "drape",
+            scene.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ])
+        .env("DRAPEKIT_NO_STABILITY_CHECK", "1")
+        .output()
+        .unwrap();
     let (_, err) = common::text(&o);
     assert_eq!(o.status.code(), Some(1), "{err}");
     for needle in [
@@ -1157,13 +1211,13 @@ fn drape_writes_pieces_frames_and_a_report_of_finite_numbers() {
 
 /// Runs `drape` on a scene text written to a scratch directory beside a copy of the sphere
 /// mesh; asserts exit code 1, that stderr names the file and contains each needle, and that no
-/// output was created.
-fn refused(name: &str, text: &str, needles: &[&str]) {
+/// output was created; its stderr.
+fn refused(name: &str, text: &str, needles: &[&str]) -> String {
     refused_with(name, text, &[], needles)
 }
 
-/// As `refused`, with extra files (name, content) beside the scene.
-fn refused_with(name: &str, text: &str, files: &[(&str, &str)], needles: &[&str]) {
+/// As `refused`, with extra files (name, content) beside the scene; returns stderr.
+fn refused_with(name: &str, text: &str, files: &[(&str, &str)], needles: &[&str]) -> String {
     let tmp = scratch(&format!("bad-{name}"));
     let dir = tmp.path();
     for (f, content) in files {
@@ -1184,27 +1238,20 @@ fn refused_with(name: &str, text: &str, files: &[(&str, &str)], needles: &[&str]
         assert!(err.contains(n), "{name}: '{n}' in: {err}");
     }
     assert!(!out.exists(), "{name}: nothing written");
+    err
 }
 
-const GOOD: &str = r#"units = "m"
-[solver]
-dt = 1e-4
-steps = 10
-[[object]]
-mesh = "sphere_r0.3.obj"
-[[piece]]
-outline = [[-0.4, -0.4], [0.4, -0.4], [0.4, 0.4], [-0.4, 0.4]]
-spacing = 0.05
-position = [0.0, 0.0, 0.4]
-fabric = "cotton"
-"#;
+/// The good scene of the bad-scene tests (each bad scene is it with a change).
+fn good() -> String {
+    std::fs::read_to_string(common::fixture("bad_scene_base.toml")).unwrap()
+}
 
 #[test]
 fn the_good_scene_of_the_bad_scene_tests_runs() {
     let tmp = scratch("good");
     let dir = tmp.path();
     beside_sphere(dir);
-    std::fs::write(dir.join("good.toml"), GOOD).unwrap();
+    std::fs::write(dir.join("good.toml"), good()).unwrap();
     let o = drape_cli(&dir.join("good.toml"), &dir.join("out"), &[]);
     assert!(o.status.success(), "{}", common::text(&o).1);
 }
@@ -1213,12 +1260,12 @@ fn the_good_scene_of_the_bad_scene_tests_runs() {
 fn bad_scenes_are_refused_naming_the_file_and_the_key() {
     refused(
         "missing_mesh",
-        &GOOD.replace("sphere_r0.3.obj", "nowhere.obj"),
+        &good().replace("sphere_r0.3.obj", "nowhere.obj"),
         &["object[1].mesh", "nowhere.obj", "does not exist"],
     );
     refused(
         "self_intersecting",
-        &GOOD.replace(
+        &good().replace(
             "[[-0.4, -0.4], [0.4, -0.4], [0.4, 0.4], [-0.4, 0.4]]",
             "[[-0.4, -0.4], [0.4, 0.4], [0.4, -0.4], [-0.4, 0.4]]",
         ),
@@ -1226,7 +1273,7 @@ fn bad_scenes_are_refused_naming_the_file_and_the_key() {
     );
     refused(
         "two_points",
-        &GOOD.replace(
+        &good().replace(
             "[[-0.4, -0.4], [0.4, -0.4], [0.4, 0.4], [-0.4, 0.4]]",
             "[[0, 0], [1, 0]]",
         ),
@@ -1234,102 +1281,104 @@ fn bad_scenes_are_refused_naming_the_file_and_the_key() {
     );
     refused(
         "negative_density",
-        &(GOOD.replace("fabric = \"cotton\"", "fabric = \"thin\"")
+        &(good().replace("fabric = \"cotton\"", "fabric = \"thin\"")
             + "[fabric.thin]\nbase = \"cotton\"\ndensity = -0.1\n"),
         &["fabric.thin.density", "positive"],
     );
     refused(
         "negative_step",
-        &GOOD.replace("dt = 1e-4", "dt = -1e-4"),
+        &good().replace("dt = 1e-4", "dt = -1e-4"),
         &["solver.dt", "positive"],
     );
     refused(
         "unknown_key",
-        &GOOD.replace("spacing = 0.05", "spacing = 0.05\ncolour = \"red\""),
-        &["unknown field `colour`"],
+        &good().replace("spacing = 0.05", "spacing = 0.05\ncolour = \"red\""),
+        &["unknown_key.toml: line 12, column 1: unknown field `colour`, expected one of"],
     );
     refused(
         "unknown_preset",
-        &GOOD.replace("fabric = \"cotton\"", "fabric = \"velvet\""),
+        &good().replace("fabric = \"cotton\"", "fabric = \"velvet\""),
         &["piece[1].fabric", "unknown fabric 'velvet'", "cotton"],
     );
     refused(
         "unknown_unit",
-        &GOOD.replace("units = \"m\"", "units = \"ft\""),
+        &good().replace("units = \"m\"", "units = \"ft\""),
         &["units", "'ft'"],
     );
     refused(
         "pin_off_the_cloth",
-        &GOOD.replace(
+        &good().replace(
             "fabric = \"cotton\"",
             "fabric = \"cotton\"\npin = [[0.0, 0.9]]",
         ),
-        &["piece[1].outline", "pin 1"],
+        &[
+            "piece[1].outline",
+            "pin 1 at (0, 0.9) is 0.5 from the nearest particle",
+        ],
     );
     refused(
         "no_stop",
-        &GOOD.replace("steps = 10", ""),
+        &good().replace("steps = 10", ""),
         &["solver", "exactly one of steps, duration or until_rest"],
     );
     refused(
         "bad_cells",
-        &(GOOD.to_string() + "[collision]\ncells = [0, 5, 5]\n"),
+        &(good() + "[collision]\ncells = [0, 5, 5]\n"),
         &["collision.cells", "1..4096"],
     ); // Keys of one integrator in a scene that uses another (the default is projective dynamics).
     refused(
         "newton_with_the_default",
-        &GOOD.replace("steps = 10", "steps = 10\nnewton_iterations = 3"),
+        &good().replace("steps = 10", "steps = 10\nnewton_iterations = 3"),
         &[
             "solver.newton_iterations",
             "integrator = \"implicit-euler\" only",
             "projective-dynamics",
         ],
     );
-    refused(
+    let err = refused(
         "iterations_with_leapfrog",
-        &GOOD.replace(
+        &good().replace(
             "steps = 10",
             "steps = 10\nintegrator = \"leapfrog\"\nchebyshev = 0.9",
         ),
-        &[
-            "solver.iterations",
-            "projective-dynamics\" only",
-            "leapfrog",
-        ],
+        &["key 'solver.chebyshev': applies to integrator = \"projective-dynamics\" only (this scene uses leapfrog)"],
     );
+    // The key by its own name, and no advice about Anderson for a leapfrog scene.
+    assert!(!err.contains("solver.iterations"), "{err}");
+    assert!(!err.contains("needs anderson = 0"), "{err}");
     refused(
         "chebyshev_with_anderson",
-        &GOOD.replace("steps = 10", "steps = 10\nchebyshev = 0.9"),
+        &good().replace("steps = 10", "steps = 10\nchebyshev = 0.9"),
         &["solver.chebyshev", "needs anderson = 0"],
     );
     refused(
         "strain_band_out_of_range",
-        &GOOD.replace("steps = 10", "steps = 10\nstrain_band = -0.1"),
+        &good().replace("steps = 10", "steps = 10\nstrain_band = -0.1"),
         &["solver.strain_band", "[0, 1), got -0.1"],
     );
     refused(
         "strain_tolerance_out_of_range",
-        &GOOD.replace("steps = 10", "steps = 10\nstrain_tolerance = 0"),
+        &good().replace("steps = 10", "steps = 10\nstrain_tolerance = 0"),
         &["solver.strain_tolerance", "(0, 1), got 0"],
     );
     refused(
         "too_many_corrections",
-        &GOOD.replace("steps = 10", "steps = 10\ncorrections = 11"),
+        &good().replace("steps = 10", "steps = 10\ncorrections = 11"),
         &["solver.corrections", "0 (none) to 10 rounds, got 11"],
     );
     refused(
         "anderson_too_deep",
-        &GOOD.replace("steps = 10", "steps = 10\nanderson = 1000"),
+        &good().replace("steps = 10", "steps = 10\nanderson = 1000"),
         &["solver.anderson", "0 (off) to 20", "got 1000"],
     );
     refused(
         "chebyshev_out_of_range",
-        &GOOD.replace("steps = 10", "steps = 10\nanderson = 0\nchebyshev = 1.0"),
+        &good().replace("steps = 10", "steps = 10\nanderson = 0\nchebyshev = 1.0"),
         &["solver.chebyshev", "(0, 1), got 1"],
     );
     refused(
         "unknown_integrator",
-        &GOOD.replace("steps = 10", "steps = 10\nintegrator = \"verlet\""),
+        &good().replace("steps = 10", "steps = 10\nintegrator = \"verlet\""),
         &[
             "solver.integrator",
             "unknown integrator 'verlet'",
@@ -1340,7 +1389,7 @@ fn bad_scenes_are_refused_naming_the_file_and_the_key() {
 
 #[test]
 fn every_problem_of_a_scene_is_reported_at_once() {
-    let text = GOOD
+    let text = good()
         .replace("dt = 1e-4", "dt = -1")
         .replace("sphere_r0.3.obj", "nowhere.obj")
         .replace(
@@ -1362,7 +1411,7 @@ fn every_problem_of_a_scene_is_reported_at_once() {
         ],
     );
     // Pieces and meshes are checked together too.
-    let text = GOOD
+    let text = good()
         .replace(
             "[[-0.4, -0.4], [0.4, -0.4], [0.4, 0.4], [-0.4, 0.4]]",
             "[[-0.4, -0.4], [0.4, 0.4], [0.4, -0.4], [-0.4, 0.4]]",
@@ -1393,7 +1442,7 @@ fn a_mesh_that_is_not_a_surface_is_refused() {
     .unwrap();
     std::fs::write(
         dir.join("flat.toml"),
-        GOOD.replace("sphere_r0.3.obj", "line.obj"),
+        good().replace("sphere_r0.3.obj", "line.obj"),
     )
     .unwrap();
     let out = dir.join("out");
@@ -1412,7 +1461,7 @@ fn a_mesh_that_is_not_a_surface_is_refused() {
     .unwrap();
     std::fs::write(
         dir.join("broken.toml"),
-        GOOD.replace("sphere_r0.3.obj", "broken.obj"),
+        good().replace("sphere_r0.3.obj", "broken.obj"),
     )
     .unwrap();
     let o = drape_cli(&dir.join("broken.toml"), &out, &[]);
@@ -1536,7 +1585,7 @@ fn a_scene_piece_with_a_hole_has_no_cloth_in_the_hole() {
     let dir = tmp.path();
     beside_sphere(dir);
     // A 20 cm square hole in the middle of the 80 cm square.
-    let holed = GOOD.replace(
+    let holed = good().replace(
         "spacing = 0.05",
         "holes = [[[-0.1, -0.1], [0.1, -0.1], [0.1, 0.1], [-0.1, 0.1]]]\nspacing = 0.05",
     );
@@ -1548,7 +1597,7 @@ fn a_scene_piece_with_a_hole_has_no_cloth_in_the_hole() {
     let in_hole = |p: &Point3| p.x.abs() < 0.1 - 1e-9 && p.y.abs() < 0.1 - 1e-9;
     assert!(!w.state.x.iter().any(in_hole));
     // A hole that leaves the outline is refused, naming the key and the hole.
-    let bad = GOOD.replace(
+    let bad = good().replace(
         "spacing = 0.05",
         "holes = [[[0.3, -0.1], [0.5, -0.1], [0.5, 0.1], [0.3, 0.1]]]\nspacing = 0.05",
     );
@@ -1633,7 +1682,7 @@ fn a_frame_callback_that_reports_rest_ends_the_run_there() {
     let tmp = scratch("frame-rest");
     let dir = tmp.path();
     beside_sphere(dir);
-    std::fs::write(dir.join("good.toml"), GOOD).unwrap();
+    std::fs::write(dir.join("good.toml"), good()).unwrap();
     let sc = scene::read(&dir.join("good.toml")).unwrap();
     let mut w = sim::load(&sc).unwrap();
     let mut seen = Vec::new();

@@ -307,7 +307,12 @@ fn repeated_points_duplicates_collinear_and_non_star_sections() {
             d.path().join("x.obj").to_str().unwrap(),
         ]);
         assert_eq!(o.status.code(), Some(1), "{name}");
-        assert!(text(&o).1.contains(msg), "{name}: {}", text(&o).1);
+        // Named with the file they are in.
+        assert!(
+            text(&o).1.contains(&format!("{name}: {msg}")),
+            "{name}: {}",
+            text(&o).1
+        );
         assert_eq!(
             listing(d.path()),
             vec![name.to_string()],
@@ -342,12 +347,12 @@ fn malformed_files_are_refused_with_the_place() {
         (
             "e.toml",
             "units = \"cm\"\nstature = 170\nbust_grith = 90\n",
-            "unknown field `bust_grith`",
+            "e.toml: line 3, column 1: unknown field `bust_grith`",
         ),
         (
             "f.toml",
             "units = \"cm\"\nstature = \"tall\"\nbust_girth = 90\nwaist_girth = 70\n",
-            "invalid type: string \"tall\", expected f64",
+            "f.toml: line 2, column 11: invalid type: string \"tall\", expected f64",
         ),
         (
             "g.toml",
@@ -635,7 +640,7 @@ fn scan_band_across_the_armpits_is_refused_naming_the_level() {
     assert_eq!(o.status.code(), Some(1));
     let err = text(&o).1;
     assert!(
-        err.contains("scan level") && err.contains("torso splits here"),
+        err.contains("mean_female.obj: scan level") && err.contains("torso splits here"),
         "{err}"
     );
     assert!(listing(dir.path()).is_empty());

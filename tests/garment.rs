@@ -11,18 +11,11 @@ use drapekit::mesh::TriMesh;
 use std::path::Path;
 
 /// Two 60 x 40 cm panels (cm, y up), one 30 cm in front of the y axis, the other 30 cm behind
-/// it and turned to face back, sewn along both sides: a tube of perimeter 120 cm.
-const TUBE: &str = r#"{"pattern": {"panels": {
-  "front": {"vertices": [[-30, 0], [30, 0], [30, 40], [-30, 40]],
-            "edges": [{"endpoints": [0, 1]}, {"endpoints": [1, 2]}, {"endpoints": [2, 3]}, {"endpoints": [3, 0]}],
-            "translation": [0, 80, 30], "rotation": [0, 0, 0]},
-  "back":  {"vertices": [[-30, 0], [30, 0], [30, 40], [-30, 40]],
-            "edges": [{"endpoints": [0, 1]}, {"endpoints": [1, 2]}, {"endpoints": [2, 3]}, {"endpoints": [3, 0]}],
-            "translation": [0, 80, -30], "rotation": [0, 180, 0]}},
-  "stitches": [[{"panel": "front", "edge": 1}, {"panel": "back", "edge": 3}],
-               [{"panel": "front", "edge": 3}, {"panel": "back", "edge": 1}]]},
-  "parameters": {}, "parameter_order": [],
-  "properties": {"curvature_coords": "relative", "units_in_meter": 100}}"#;
+/// it and turned to face back, sewn along both sides: a tube of perimeter 120 cm
+/// (fixtures/tube_specification.json, also used by tools/bad_input_catalogue.sh).
+fn tube() -> String {
+    std::fs::read_to_string(common::fixture("tube_specification.json")).unwrap()
+}
 
 /// A closed cylinder about the z axis (drapekit's frame) of radius `r` from z0 to z1.
 fn cylinder(r: f64, z0: f64, z1: f64, n: usize) -> TriMesh {
@@ -57,7 +50,7 @@ fn frustum(r0: f64, r1: f64, z0: f64, z1: f64, n: usize) -> TriMesh {
 
 #[test]
 fn stitched_samples_become_seam_springs_between_the_placed_sides() {
-    let pattern = parse(TUBE, Path::new("tube.json")).unwrap();
+    let pattern = parse(&tube(), Path::new("tube.json")).unwrap();
     let opts = AssembleOptions {
         spacing: 0.02,
         ..AssembleOptions::default()
@@ -84,7 +77,7 @@ fn stitched_samples_become_seam_springs_between_the_placed_sides() {
 
 #[test]
 fn a_tube_sewn_round_a_cylinder_closes_and_is_round() {
-    let pattern = parse(TUBE, Path::new("tube.json")).unwrap();
+    let pattern = parse(&tube(), Path::new("tube.json")).unwrap();
     let mut settings = GarmentSettings::default();
     settings.assemble.spacing = 0.02;
     // A snug fit: the tube's round radius is 1.2 m / 2 pi = 0.191 m; the cloth keeps the body
@@ -237,7 +230,7 @@ fn sewing_gives_the_same_bits_with_one_or_two_threads() {
 fn the_garment_command_reports_a_tube_on_a_cylinder() {
     let dir = tempfile::tempdir().unwrap();
     let pattern = dir.path().join("tube_specification.json");
-    std::fs::write(&pattern, TUBE).unwrap();
+    std::fs::write(&pattern, tube()).unwrap();
     // The cylinder in the pattern's frame (y up): drapekit's (x, y, z) is the file's (x, z, -y).
     let body = cylinder(0.186, 0.5, 1.5, 48);
     let mut obj = String::new();
@@ -406,7 +399,7 @@ fn refused_before_work(pattern: &str, extra: &[&str]) -> (bool, String, bool) {
 
 #[test]
 fn a_panel_name_that_is_not_a_file_name_is_refused_before_work() {
-    let bad = TUBE.replace("\"front\"", "\"../front\"");
+    let bad = tube().replace("\"front\"", "\"../front\"");
     let (failed, stderr, wrote) = refused_before_work(&bad, &["--panels"]);
     assert!(failed && !wrote);
     assert!(stderr.contains("\"../front\""), "{stderr}");
@@ -414,7 +407,7 @@ fn a_panel_name_that_is_not_a_file_name_is_refused_before_work() {
 
 #[test]
 fn the_garment_command_refuses_an_explicit_integrator_before_work() {
-    let (failed, stderr, wrote) = refused_before_work(TUBE, &["--integrator", "leapfrog"]);
+    let (failed, stderr, wrote) = refused_before_work(&tube(), &["--integrator", "leapfrog"]);
     assert!(failed && !wrote);
     // Refused by the flag's check, before the body is read.
     assert!(stderr.contains("--integrator leapfrog"), "{stderr}");
@@ -423,13 +416,13 @@ fn the_garment_command_refuses_an_explicit_integrator_before_work() {
 #[test]
 fn a_panel_facing_into_the_body_is_refused_by_name() {
     // The tube's back panel without its half turn: its outline faces the cylinder.
-    let flipped = TUBE.replace(
+    let flipped = tube().replace(
         r#""translation": [0, 80, -30], "rotation": [0, 180, 0]"#,
         r#""translation": [0, 80, -30], "rotation": [0, 0, 0]"#,
     );
-    assert_ne!(flipped, TUBE);
+    assert_ne!(flipped, tube());
     let body = cylinder(0.186, 0.5, 1.5, 48);
-    let good = parse(TUBE, Path::new("tube.json")).unwrap();
+    let good = parse(&tube(), Path::new("tube.json")).unwrap();
     assert!(garment_world(&good, body.clone(), &GarmentSettings::default()).is_ok());
     let bad = parse(&flipped, Path::new("tube.json")).unwrap();
     let Err(e) = garment_world(&bad, body, &GarmentSettings::default()) else {

@@ -115,6 +115,7 @@ fn run(
     let control = Control {
         cancel: Some(&flag),
         resume,
+        ..Control::default()
     };
     let stop = Stop::Steps(c.steps);
     let r = sim::run(

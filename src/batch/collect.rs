@@ -77,7 +77,8 @@ pub fn statuses(out: &Path) -> Result<Vec<Status>, BatchError> {
         });
     }
     let ids = order::load(out)?;
-    let pos = |s: &Status| ids.iter().position(|i| *i == s.id).unwrap_or(s.position);
+    let positions = order::positions(&ids);
+    let pos = |s: &Status| positions.get(s.id.as_str()).copied().unwrap_or(s.position);
     v.sort_by(|a, b| pos(a).cmp(&pos(b)).then(a.id.cmp(&b.id)));
     Ok(v)
 }

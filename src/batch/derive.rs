@@ -35,7 +35,7 @@ pub fn scene(plan: &Plan, file: &Path, changes: &SceneChanges) -> Result<String,
     })?;
     let mut t: Table = toml::from_str(&text).map_err(|e| BatchError::Toml {
         path: file.to_path_buf(),
-        message: e.to_string().trim_end().to_string(),
+        message: crate::scene::toml_message(&text, &e),
     })?;
     solver(&mut t, &plan.solver);
     let dir = file.parent().unwrap_or(Path::new("."));

@@ -9,6 +9,7 @@
 
 use super::plan::Plan;
 use super::BatchError;
+use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
 
 /// The order file of an output folder.
@@ -38,12 +39,21 @@ pub fn load(out: &Path) -> Result<Vec<String>, BatchError> {
 
 /// `known` with the plan's new ids appended, in the plan's order.
 pub fn merge(mut known: Vec<String>, plan: &Plan) -> Vec<String> {
+    let seen: HashSet<String> = known.iter().cloned().collect();
     for j in &plan.jobs {
-        if !known.contains(&j.id) {
+        if !seen.contains(&j.id) {
             known.push(j.id.clone());
         }
     }
     known
+}
+
+/// Each id's position in `ids` (an order as [`load`] or [`merge`] give it).
+pub fn positions(ids: &[String]) -> HashMap<&str, usize> {
+    ids.iter()
+        .enumerate()
+        .map(|(k, i)| (i.as_str(), k))
+        .collect()
 }
 
 /// Loads `out`'s order, merges the plan into it and saves it (atomically) when it grew.

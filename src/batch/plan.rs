@@ -28,12 +28,13 @@
 //! Jobs: the product garments x bodies x fabrics x sizes (an absent axis counts once, as
 //! "the scene's own"), garments outermost, or the `[[job]]` list in its order. A job's id is
 //! its axis values' names joined by `.` (`square.cotton.s`): it depends on nothing else, so
-//! adding a value to an axis keeps every id. Names are 1 to 64 of `A-Z a-z 0-9 _ -`.
+//! adding a value to an axis keeps every id. Names are 1 to 64 of `A-Z a-z 0-9 _ -`. A plan
+//! makes at most [`MAX_JOBS`] jobs (by its product or its list), refused by key beyond.
 
 use super::BatchError;
 use serde::Deserialize;
 use sha2::{Digest, Sha256};
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap, HashSet};
 use std::path::{Path, PathBuf};
 
 #[derive(Deserialize)]
@@ -332,6 +333,10 @@ const FABRIC_KEYS: [&str; 9] = [
     "friction",
 ];
 
+/// The most jobs a plan may make, by the product of its axes or by its `[[job]]` list: each is
+/// a folder of outputs, a status and a row of the table (and a task of a scheduler's array).
+pub const MAX_JOBS: usize = 100_000;
+
 /// Collects problems as (key, message).
 #[derive(Default)]
 struct Problems(Vec<(String, String)>);
@@ -364,7 +369,7 @@ pub fn read(path: &Path) -> Result<Plan, BatchError> {
 pub fn parse(text: &str, path: &Path) -> Result<Plan, BatchError> {
     let f: PlanFile = toml::from_str(text).map_err(|e| BatchError::Toml {
         path: path.to_path_buf(),
-        message: e.to_string().trim_end().to_string(),
+        message: crate::scene::toml_message(text, &e),
     })?;
     let dir = path
         .parent()
@@ -392,10 +397,27 @@ pub fn parse(text: &str, path: &Path) -> Result<Plan, BatchError> {
         resources,
         jobs: Vec::new(),
     };
-    plan.jobs = if f.job.is_empty() {
-        plan.product()
+    plan.jobs = if !f.job.is_empty() {
+        if f.job.len() > MAX_JOBS {
+            p.add(
+                "job",
+                format!(
+                    "{} [[job]] entries: at most {MAX_JOBS}; split the plan",
+                    f.job.len()
+                ),
+            );
+            Vec::new()
+        } else {
+            plan.listed(&f.job, &mut p)
+        }
     } else {
-        plan.listed(&f.job, &mut p)
+        match plan.product_count() {
+            Ok(_) => plan.product(),
+            Err(message) => {
+                p.add("garment x body x fabrics x size", message);
+                Vec::new()
+            }
+        }
     };
     plan.check_jobs(&mut p);
     if p.0.is_empty() {
@@ -408,16 +430,29 @@ pub fn parse(text: &str, path: &Path) -> Result<Plan, BatchError> {
     }
 }
 
-fn check_name(key: &str, name: &str, seen: &mut Vec<String>, p: &mut Problems) {
+fn check_name<'a>(key: &str, name: &'a str, seen: &mut HashSet<&'a str>, p: &mut Problems) {
     if !valid_name(name) {
         p.add(
             key,
             format!("'{name}' is not a name: 1 to 64 of A-Z a-z 0-9 _ - (it goes into job ids and folder names)"),
         );
-    } else if seen.iter().any(|s| s == name) {
+    } else if !seen.insert(name) {
         p.add(key, format!("'{name}' is given twice"));
     }
-    seen.push(name.to_string());
+}
+
+/// An axis's names for a message: all of a short axis, the first ten of a long one.
+fn names_listed(names: &[&str]) -> String {
+    const SHOWN: usize = 10;
+    if names.len() <= SHOWN {
+        names.join(", ")
+    } else {
+        format!(
+            "{}, ... ({} in all)",
+            names[..SHOWN].join(", "),
+            names.len()
+        )
+    }
 }
 
 /// A file named by the plan, relative to the plan's folder: absolute, and checked to exist.
@@ -439,7 +474,7 @@ fn garments(files: &[GarmentFile], dir: &Path, p: &mut Problems) -> Vec<Garment>
             "the plan needs at least one [[garment]] (a scene or a pattern)",
         );
     }
-    let mut seen = Vec::new();
+    let mut seen = HashSet::new();
     let mut out = Vec::new();
     for (i, g) in files.iter().enumerate() {
         let k = |s: &str| format!("garment[{i}].{s}");
@@ -462,7 +497,10 @@ fn garments(files: &[GarmentFile], dir: &Path, p: &mut Problems) -> Vec<Garment>
                 if !(spacing.is_finite() && spacing > 0.0) {
                     p.add(
                         k("spacing"),
-                        format!("must be a positive length in m, got {spacing}"),
+                        format!(
+                            "must be a positive length in m, got {}",
+                            crate::math::short(spacing)
+                        ),
                     );
                 }
                 GarmentKind::Pattern {
@@ -487,7 +525,7 @@ fn garments(files: &[GarmentFile], dir: &Path, p: &mut Problems) -> Vec<Garment>
 }
 
 fn bodies(files: &[BodyFile], dir: &Path, p: &mut Problems) -> Vec<Body> {
-    let mut seen = Vec::new();
+    let mut seen = HashSet::new();
     let mut out = Vec::new();
     for (i, b) in files.iter().enumerate() {
         let k = |s: &str| format!("body[{i}].{s}");
@@ -537,7 +575,7 @@ fn fabrics(
     p: &mut Problems,
 ) -> Vec<FabricChoice> {
     let names = names.unwrap_or_default();
-    let mut seen = Vec::new();
+    let mut seen = HashSet::new();
     let mut out = Vec::new();
     for (i, n) in names.iter().enumerate() {
         let key = format!("fabrics[{i}]");
@@ -561,8 +599,9 @@ fn fabrics(
             table,
         });
     }
+    let listed: HashSet<&str> = names.iter().map(String::as_str).collect();
     for (name, t) in tables {
-        if !names.contains(name) {
+        if !listed.contains(name.as_str()) {
             p.add(
                 format!("fabric.{name}"),
                 "defined but not listed in fabrics = [...]",
@@ -581,7 +620,7 @@ fn fabrics(
 }
 
 fn sizes(files: &[SizeFile], p: &mut Problems) -> Vec<Size> {
-    let mut seen = Vec::new();
+    let mut seen = HashSet::new();
     files
         .iter()
         .enumerate()
@@ -591,7 +630,10 @@ fn sizes(files: &[SizeFile], p: &mut Problems) -> Vec<Size> {
             if !(scale.is_finite() && (0.1..=10.0).contains(&scale)) {
                 p.add(
                     format!("size[{i}].scale"),
-                    format!("must be a factor from 0.1 to 10, got {scale}"),
+                    format!(
+                        "must be a factor from 0.1 to 10, got {}",
+                        crate::math::short(scale)
+                    ),
                 );
             }
             Size {
@@ -605,7 +647,10 @@ fn sizes(files: &[SizeFile], p: &mut Problems) -> Vec<Size> {
 fn positive(p: &mut Problems, key: &str, v: Option<f64>) {
     if let Some(v) = v {
         if !(v.is_finite() && v > 0.0) {
-            p.add(key, format!("must be a positive number, got {v}"));
+            p.add(
+                key,
+                format!("must be a positive number, got {}", crate::math::short(v)),
+            );
         }
     }
 }
@@ -708,6 +753,27 @@ fn check_resources(r: &Resources, p: &mut Problems) {
 }
 
 impl Plan {
+    /// The number of jobs the product of the axes makes, or why it is too many.
+    fn product_count(&self) -> Result<usize, String> {
+        let lengths = [
+            self.garments.len(),
+            self.bodies.len().max(1),
+            self.fabrics.len().max(1),
+            self.sizes.len().max(1),
+        ];
+        let count = lengths
+            .iter()
+            .try_fold(1usize, |n, &l| n.checked_mul(l))
+            .filter(|&n| n <= MAX_JOBS);
+        count.ok_or_else(|| {
+            let product: u128 = lengths.iter().map(|&l| l as u128).product();
+            format!(
+                "{} x {} x {} x {} is {product} jobs: at most {MAX_JOBS}; list the jobs wanted with [[job]] or split the plan",
+                lengths[0], lengths[1], lengths[2], lengths[3]
+            )
+        })
+    }
+
     /// Every combination of the axes, garments outermost, sizes innermost.
     fn product(&self) -> Vec<Job> {
         let axis = |n: usize| -> Vec<Option<usize>> {
@@ -752,21 +818,34 @@ impl Plan {
 
     /// The `[[job]]` list, each value looked up by name.
     fn listed(&self, files: &[JobFile], p: &mut Problems) -> Vec<Job> {
+        let axis = |names: Vec<&'_ str>| -> (HashMap<String, usize>, String) {
+            let index = names
+                .iter()
+                .enumerate()
+                .map(|(k, n)| (n.to_string(), k))
+                .collect();
+            (index, names_listed(&names))
+        };
+        let garments = axis(self.garments.iter().map(|g| g.name.as_str()).collect());
+        let bodies = axis(self.bodies.iter().map(|b| b.name.as_str()).collect());
+        let fabrics = axis(self.fabrics.iter().map(|f| f.name.as_str()).collect());
+        let sizes = axis(self.sizes.iter().map(|s| s.name.as_str()).collect());
         let mut jobs = Vec::new();
+        let mut ids = HashSet::new();
         for (i, j) in files.iter().enumerate() {
             let find = |p: &mut Problems,
                         key: &str,
                         v: Option<&String>,
-                        names: Vec<&str>|
+                        (index, names): &(HashMap<String, usize>, String)|
              -> Result<Option<usize>, ()> {
-                match (v, names.is_empty()) {
+                match (v, index.is_empty()) {
                     (None, true) => Ok(None),
-                    (Some(v), false) => match names.iter().position(|n| n == v) {
-                        Some(k) => Ok(Some(k)),
+                    (Some(v), false) => match index.get(v) {
+                        Some(&k) => Ok(Some(k)),
                         None => {
                             p.add(
                                 format!("job[{i}].{key}"),
-                                format!("'{v}' is not one of {}", names.join(", ")),
+                                format!("'{v}' is not one of {names}"),
                             );
                             Err(())
                         }
@@ -774,7 +853,7 @@ impl Plan {
                     (None, false) => {
                         p.add(
                             format!("job[{i}].{key}"),
-                            format!("missing: the plan's {key}s are {}", names.join(", ")),
+                            format!("missing: the plan's {key}s are {names}"),
                         );
                         Err(())
                     }
@@ -787,33 +866,13 @@ impl Plan {
                     }
                 }
             };
-            let g = find(
-                p,
-                "garment",
-                Some(&j.garment),
-                self.garments.iter().map(|g| g.name.as_str()).collect(),
-            );
-            let b = find(
-                p,
-                "body",
-                j.body.as_ref(),
-                self.bodies.iter().map(|b| b.name.as_str()).collect(),
-            );
-            let f = find(
-                p,
-                "fabric",
-                j.fabric.as_ref(),
-                self.fabrics.iter().map(|f| f.name.as_str()).collect(),
-            );
-            let s = find(
-                p,
-                "size",
-                j.size.as_ref(),
-                self.sizes.iter().map(|s| s.name.as_str()).collect(),
-            );
+            let g = find(p, "garment", Some(&j.garment), &garments);
+            let b = find(p, "body", j.body.as_ref(), &bodies);
+            let f = find(p, "fabric", j.fabric.as_ref(), &fabrics);
+            let s = find(p, "size", j.size.as_ref(), &sizes);
             if let (Ok(Some(g)), Ok(b), Ok(f), Ok(s)) = (g, b, f, s) {
                 let job = self.job(g, b, f, s);
-                if jobs.iter().any(|o: &Job| o.id == job.id) {
+                if !ids.insert(job.id.clone()) {
                     p.add(
                         format!("job[{i}]"),
                         format!("job {} is listed twice", job.id),
@@ -829,8 +888,11 @@ impl Plan {
     /// What every job needs: a body for a pattern, an object for a scene's body or size, presets
     /// for a pattern's fabric.
     fn check_jobs(&self, p: &mut Problems) {
-        for (gi, g) in self.garments.iter().enumerate() {
-            let jobs: Vec<&Job> = self.jobs.iter().filter(|j| j.garment == gi).collect();
+        let mut by_garment: Vec<Vec<&Job>> = vec![Vec::new(); self.garments.len()];
+        for j in &self.jobs {
+            by_garment[j.garment].push(j);
+        }
+        for ((gi, g), jobs) in self.garments.iter().enumerate().zip(by_garment) {
             let key = format!("garment[{gi}]");
             match &g.kind {
                 GarmentKind::Pattern { .. } => {
@@ -850,7 +912,8 @@ impl Plan {
                 }
                 GarmentKind::Scene { file, body_object } => {
                     let needs = jobs.iter().any(|j| j.body.is_some() || j.size.is_some());
-                    if needs {
+                    // A scene that is not a file is reported once, by its own key.
+                    if needs && file.is_file() {
                         if let Err(m) = scene_object(file, body_object.as_deref()) {
                             p.add(format!("{key}.body_object"), m);
                         }

@@ -80,9 +80,10 @@ fn select<'a>(
     ids: &[String],
     index: Option<usize>,
 ) -> Result<Vec<(usize, &'a Job)>, BatchError> {
+    let positions = super::order::positions(ids);
     let position = |j: &Job| {
-        ids.iter()
-            .position(|i| *i == j.id)
+        *positions
+            .get(j.id.as_str())
             .expect("every plan id is in the order")
     };
     match index {

@@ -100,6 +100,7 @@ fn list(a: PlanArgs) -> anyhow::Result<()> {
         Some(o) => order::merge(order::load(o)?, &p),
         None => p.jobs.iter().map(|j| j.id.clone()).collect(),
     };
+    let positions = order::positions(&ids);
     let mut rows = Vec::new();
     for j in &p.jobs {
         let state = match &a.output {
@@ -112,7 +113,7 @@ fn list(a: PlanArgs) -> anyhow::Result<()> {
             None => None,
         };
         rows.push(Listed {
-            position: ids.iter().position(|i| *i == j.id).expect("merged"),
+            position: positions[j.id.as_str()],
             id: j.id.clone(),
             kind: match p.garments[j.garment].kind {
                 plan::GarmentKind::Scene { .. } => "scene",

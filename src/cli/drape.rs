@@ -517,6 +517,7 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
     let control = sim::Control {
         cancel: Some(signals.cancel()),
         resume: resume.as_ref(),
+        ..sim::Control::default()
     };
     let stats = sim::run(
         &mut world, &sc.solver, sc.stop, sc.frames, &mut frame, &progress, control,

@@ -216,7 +216,7 @@ fn load(args: &FitArgs) -> Result<Source, FitError> {
         from: args.from,
         to: args.to,
     };
-    let (sections, (from, to)) = torso_sections(&body, &opts)?;
+    let (sections, (from, to)) = torso_sections(&body, &opts).map_err(|e| e.in_file(p))?;
     let targets = section_targets(&sections, "level");
     Ok(Source {
         path: p.clone(),
@@ -272,7 +272,8 @@ pub fn run(args: FitArgs) -> anyhow::Result<()> {
         caps: !args.open,
         tolerance,
     };
-    let fitted = fit_sections(src.sections, &src.targets, &opts)?;
+    let fitted =
+        fit_sections(src.sections, &src.targets, &opts).map_err(|e| e.in_file(&src.path))?;
     let mut mesh = fitted.mesh;
     let out_units = args.to_units.unwrap_or(src.units);
     scale(&mut mesh, Units::factor(src.units, out_units));

@@ -225,7 +225,7 @@ pub enum PatternError {
     #[error("hole {hole} {reason}")]
     Hole { hole: usize, reason: String },
     /// A pin away from every particle.
-    #[error("pin {index} at ({x}, {y}) is {distance:.3e} from the nearest particle; pins must be outline points or grid crossings")]
+    #[error("pin {index} at ({x}, {y}) is {d} from the nearest particle; pins must be outline points or grid crossings", d = crate::math::short(*distance))]
     Pin {
         index: usize,
         x: f64,

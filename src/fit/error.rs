@@ -1,6 +1,6 @@
 //! Errors of fitting: bad input files, bad sections, bad measurements, bad scans.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Everything that stops a fit, with the file, line or key, and section it concerns.
 #[derive(Debug, thiserror::Error)]
@@ -94,6 +94,29 @@ pub enum FitError {
     /// Options that cannot work together.
     #[error("{0}")]
     Options(String),
+    /// A problem of the sections read from (or made from) the input file `path`: a sections
+    /// file, a measurement set, a body mesh ([`FitError::in_file`]).
+    #[error("{}: {error}", path.display())]
+    InFile { path: PathBuf, error: Box<FitError> },
+}
+
+impl FitError {
+    /// This error with the input file it concerns, when it does not name one already (the
+    /// problems of sections and scan levels).
+    pub fn in_file(self, path: &Path) -> FitError {
+        match self {
+            FitError::TooFewSections { .. }
+            | FitError::TooFewPoints { .. }
+            | FitError::Degenerate { .. }
+            | FitError::DuplicateHeight { .. }
+            | FitError::NonFinite { .. }
+            | FitError::Scan { .. } => FitError::InFile {
+                path: path.to_path_buf(),
+                error: Box::new(self),
+            },
+            e => e,
+        }
+    }
 }
 
 /// What to do when a body is tallest along `axis` (x, y or z) and another up axis was given.

@@ -211,7 +211,7 @@ pub fn read(path: &Path) -> Result<Measurements, FitError> {
 pub fn read_str(text: &str, path: &Path) -> Result<Measurements, FitError> {
     toml::from_str(text).map_err(|e| FitError::Toml {
         path: path.to_path_buf(),
-        message: e.to_string().trim_end().to_string(),
+        message: crate::scene::toml_message(text, &e),
     })
 }
 
@@ -335,9 +335,10 @@ pub fn sections(
         .ok_or_else(|| key_err("stature", "is required".into()))?;
     let positive = |key: &str, v: Option<f64>| -> Result<Option<f64>, FitError> {
         match v {
-            Some(x) if !(x.is_finite() && x > 0.0) => {
-                Err(key_err(key, format!("must be a positive number, got {x}")))
-            }
+            Some(x) if !(x.is_finite() && x > 0.0) => Err(key_err(
+                key,
+                format!("must be a positive number, got {}", short(x)),
+            )),
             _ => Ok(v),
         }
     };
@@ -632,6 +633,19 @@ mod tests {
             sections(&bad, p, 41).unwrap_err().to_string(),
             "m.toml: key 'hip_girth': must be a positive number, got -3"
         );
+        // A huge negative or a tiny one in short numbers, never 300 digits.
+        for (x, shown) in [(-1e300, "-1.000e300"), (-1.0 / 3.0, "-0.3333")] {
+            let bad = Measurements {
+                stature: Some(166.0),
+                waist_girth: Some(80.0),
+                hip_girth: Some(x),
+                ..Default::default()
+            };
+            assert_eq!(
+                sections(&bad, p, 41).unwrap_err().to_string(),
+                format!("m.toml: key 'hip_girth': must be a positive number, got {shown}")
+            );
+        }
         let order = Measurements {
             stature: Some(166.0),
             waist_girth: Some(80.0),

@@ -426,7 +426,7 @@ fn run_stage(
 ) -> Result<sim::RunStats, SimError> {
     let control = Control {
         cancel,
-        resume: None,
+        ..Control::default()
     };
     sim::run(
         world,

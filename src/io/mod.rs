@@ -514,7 +514,9 @@ where
         .prefix(&format!("{TEMP_PREFIX}{}-{name}.", std::process::id()))
         .suffix(TEMP_SUFFIX)
         .tempfile_in(&dir)
-        .map_err(werr)?;
+        // Without the temporary file's name (tempfile adds it): the output's path is the one
+        // a user gave.
+        .map_err(|e| werr(std::io::Error::from(e.kind())))?;
     {
         let mut w = BufWriter::with_capacity(1 << 20, tmp.as_file());
         body(&mut w).map_err(werr)?;

@@ -28,7 +28,7 @@ pub use measure::{
     drape_coefficient, inside, min_clearance, particles_inside, placement_warnings, strain,
 };
 pub use settings::{Cells, Stop};
-pub use watch::Instability;
+pub use watch::{Instability, StabilityCheck};
 
 use crate::cloth::elements::{Spring, SpringKind};
 use crate::cloth::fabric::Fabric;
@@ -481,7 +481,8 @@ pub fn collide(
     moved.into_inner().unwrap().sqrt()
 }
 
-/// How a run is steered from outside: cancelled, or continued from a checkpoint.
+/// How a run is steered from outside: cancelled, continued from a checkpoint, or run without
+/// its stability check.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Control<'a> {
     /// Checked before each step: once set (a signal handler sets it), the run ends after the
@@ -491,6 +492,9 @@ pub struct Control<'a> {
     /// instead of the world's state: the run goes on from the step after it, to the same bits
     /// as a run that was never stopped.
     pub resume: Option<&'a Checkpoint>,
+    /// Whether the energy watch stops an unstable run (default [`StabilityCheck::On`]; `Off`
+    /// is for experiments that show what the watch prevents, never the command line's).
+    pub stability: StabilityCheck,
 }
 
 /// What the stepping loop keeps besides the world and the solver.
@@ -562,7 +566,7 @@ pub fn run(
     // Built from the world as loaded (a checkpoint's pinned particles are where they were).
     let mut solver: Box<dyn Solver> = integrate::make(settings, &world.model, &world.state.x);
     let mut lp = Loop {
-        watch: watch::Watch::new(world),
+        watch: watch::Watch::new(world).checking(control.stability),
         rest: watch::Rest::new(stop, dt),
         stats: RunStats::default(),
         travel: 0.0,

@@ -40,6 +40,18 @@ impl fmt::Display for Instability {
     }
 }
 
+/// Whether the energy watch may stop a run ([`super::Control::stability`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum StabilityCheck {
+    /// Every check: a non-finite position or velocity, or an energy rise beyond the scene's
+    /// budget, ends the run as unstable (the default; the only choice of the command line).
+    #[default]
+    On,
+    /// Never: the run goes on whatever its numbers do. For experiments and tests that show
+    /// what the watch prevents; a run without it can end with non-finite positions.
+    Off,
+}
+
 /// The energy watch of a run.
 #[derive(Debug)]
 pub struct Watch {
@@ -48,12 +60,11 @@ pub struct Watch {
     budget: f64,
     /// Work done on the cloth by the collide phase, J.
     work: f64,
-    /// Switched off (tests only show that the watch matters).
-    pub off: bool,
+    check: StabilityCheck,
 }
 
 impl Watch {
-    /// The watch of a world at its start.
+    /// The watch of a world at its start, checking (see [`Watch::checking`] to switch it off).
     pub fn new(world: &World) -> Watch {
         let m = &world.model;
         let x0 = world.state.x.clone();
@@ -73,8 +84,13 @@ impl Watch {
             e0,
             budget,
             work: 0.0,
-            off: std::env::var_os("DRAPEKIT_NO_STABILITY_CHECK").is_some(),
+            check: StabilityCheck::On,
         }
+    }
+
+    /// The same watch with its check switched on or off.
+    pub fn checking(self, check: StabilityCheck) -> Watch {
+        Watch { check, ..self }
     }
 
     /// The mechanical energy of the world, relative to the start's gravity energy, J.
@@ -97,7 +113,7 @@ impl Watch {
 
     /// Whether the world is still sound.
     pub fn check(&self, world: &World) -> Result<(), Instability> {
-        if self.off {
+        if self.check == StabilityCheck::Off {
             return Ok(());
         }
         let s = &world.state;
