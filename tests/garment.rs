@@ -516,7 +516,7 @@ fn ngon(r: f64, n: usize) -> f64 {
 #[test]
 fn the_fit_check_finds_the_rings_and_judges_them_on_a_cylinder() {
     use drapekit::garment::fit_check::{fit_check, FitCheckOptions, RingKind};
-    let pattern = parse(TUBE, Path::new("tube.json")).unwrap();
+    let pattern = parse(&tube(), Path::new("tube.json")).unwrap();
     let c = 0.004;
     let opts = FitCheckOptions::with_clearance(c);
     // The tube's open ends are its rings (its side seams are vertical): 1.2 m each, at 0.8
