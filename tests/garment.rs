@@ -3,7 +3,9 @@
 mod common;
 
 use drapekit::garment::assemble::{assemble, AssembleOptions};
-use drapekit::garment::drape::{garment_world, settle, sew, GarmentSettings, REST_FRACTION};
+use drapekit::garment::drape::{
+    body_collider, garment_world, settle, sew, GarmentSettings, REST_FRACTION,
+};
 use drapekit::garment::measure::measures;
 use drapekit::garment::parse;
 use drapekit::math::{Point3, Vec3};
@@ -23,30 +25,6 @@ const TUBE: &str = r#"{"pattern": {"panels": {
                [{"panel": "front", "edge": 3}, {"panel": "back", "edge": 1}]]},
   "parameters": {}, "parameter_order": [],
   "properties": {"curvature_coords": "relative", "units_in_meter": 100}}"#;
-
-/// A closed cylinder about the z axis (drapekit's frame) of radius `r` from z0 to z1.
-fn cylinder(r: f64, z0: f64, z1: f64, n: usize) -> TriMesh {
-    let mut p = Vec::new();
-    for &z in &[z0, z1] {
-        for k in 0..n {
-            let a = std::f64::consts::TAU * k as f64 / n as f64;
-            p.push(Point3::new(r * a.cos(), r * a.sin(), z));
-        }
-    }
-    p.push(Point3::new(0.0, 0.0, z0));
-    p.push(Point3::new(0.0, 0.0, z1));
-    let (c0, c1) = (2 * n as u32, 2 * n as u32 + 1);
-    let mut f = Vec::new();
-    for k in 0..n as u32 {
-        let j = (k + 1) % n as u32;
-        let n = n as u32;
-        f.push([k, j, n + j]);
-        f.push([k, n + j, n + k]);
-        f.push([c0, j, k]);
-        f.push([c1, n + k, n + j]);
-    }
-    TriMesh::new(p, f)
-}
 
 #[test]
 fn stitched_samples_become_seam_springs_between_the_placed_sides() {
@@ -84,8 +62,9 @@ fn a_tube_sewn_round_a_cylinder_closes_and_is_round() {
     // clearance (2.5 mm at 2 cm spacing) and its thickness (0.3 mm) off the faces: 0.1888 m.
     let r_body = 0.186;
     let clearance = 0.125 * settings.assemble.spacing;
-    let body = cylinder(r_body, 0.5, 1.5, 48);
-    let (mut world, seams, seam_k) = garment_world(&pattern, body, &settings).unwrap();
+    let body = common::cylinder(r_body, 0.5, 1.5, 48);
+    let (mut world, seams, seam_k) =
+        garment_world(&pattern, vec![body_collider(body)], &settings).unwrap();
     let report = sew(&mut world, &seams, &settings, &|_| {}, None).unwrap();
     assert!(report.done, "seams closed: {report:?}");
     assert!(report.seam_gap_max <= 1e-3);
@@ -142,7 +121,8 @@ fn a_seam_across_a_bar_is_sewn_over_it_not_through_it() {
     let mut settings = GarmentSettings::default();
     settings.assemble.spacing = 0.02;
     let (bar, r, zc) = shoulder_bar();
-    let (mut world, seams, _) = garment_world(&pattern, bar, &settings).unwrap();
+    let (mut world, seams, _) =
+        garment_world(&pattern, vec![body_collider(bar)], &settings).unwrap();
     let x = &world.state.x;
     assert!(seams.iter().all(|s| (x[s.a as usize].z - 1.2).abs() < 1e-9));
     let report = sew(&mut world, &seams, &settings, &|_| {}, None).unwrap();
@@ -163,7 +143,7 @@ fn a_seam_across_a_bar_is_sewn_over_it_not_through_it() {
 /// The bar of `SHOULDER`: radius 8 cm along x, its axis at z = 1.17 m, its top at 1.25 m.
 fn shoulder_bar() -> (TriMesh, f64, f64) {
     let (r, zc) = (0.08, 1.17);
-    let mut bar = cylinder(r, -0.45, 0.45, 48);
+    let mut bar = common::cylinder(r, -0.45, 0.45, 48);
     for p in &mut bar.positions {
         // (x, y, z) -> (z, x, y + zc): a rotation, the faces stay outward.
         *p = Point3::new(p.z, p.x, p.y + zc);
@@ -183,7 +163,8 @@ fn a_drape_at_rest_reports_the_rest_it_measured() {
     // With the fabric's air damping (0.5/s) and the solver's, the hanging panels' slow swing
     // (a pendulum of about 30 cm) takes 11 s to fall under the rest test's 0.3 mm a frame.
     settings.settle_max = 20.0;
-    let (mut world, seams, seam_k) = garment_world(&pattern, shoulder_bar().0, &settings).unwrap();
+    let (mut world, seams, seam_k) =
+        garment_world(&pattern, vec![body_collider(shoulder_bar().0)], &settings).unwrap();
     assert!(
         sew(&mut world, &seams, &settings, &|_| {}, None)
             .unwrap()
@@ -211,7 +192,8 @@ fn sewing_gives_the_same_bits_with_one_or_two_threads() {
             .build()
             .unwrap();
         pool.install(|| {
-            let (mut world, seams, _) = garment_world(&pattern, bar, &settings).unwrap();
+            let (mut world, seams, _) =
+                garment_world(&pattern, vec![body_collider(bar)], &settings).unwrap();
             sew(&mut world, &seams, &settings, &|_| {}, None).unwrap();
             let candidates = world.self_contact.as_ref().unwrap().totals.candidates;
             (world.state.x, candidates)
@@ -232,16 +214,9 @@ fn the_garment_command_reports_a_tube_on_a_cylinder() {
     let pattern = dir.path().join("tube_specification.json");
     std::fs::write(&pattern, TUBE).unwrap();
     // The cylinder in the pattern's frame (y up): drapekit's (x, y, z) is the file's (x, z, -y).
-    let body = cylinder(0.186, 0.5, 1.5, 48);
-    let mut obj = String::new();
-    for p in &body.positions {
-        obj += &format!("v {} {} {}\n", p.x, p.z, -p.y);
-    }
-    for f in &body.faces {
-        obj += &format!("f {} {} {}\n", f[0] + 1, f[1] + 1, f[2] + 1);
-    }
+    let body = common::cylinder(0.186, 0.5, 1.5, 48);
     let body_path = dir.path().join("column.obj");
-    std::fs::write(&body_path, obj).unwrap();
+    common::write_y_up_obj(&body, &body_path);
     let out = dir.path().join("out");
     let o = common::run(&[
         "garment",
@@ -414,11 +389,16 @@ fn a_panel_facing_into_the_body_is_refused_by_name() {
         r#""translation": [0, 80, -30], "rotation": [0, 0, 0]"#,
     );
     assert_ne!(flipped, TUBE);
-    let body = cylinder(0.186, 0.5, 1.5, 48);
+    let body = common::cylinder(0.186, 0.5, 1.5, 48);
     let good = parse(TUBE, Path::new("tube.json")).unwrap();
-    assert!(garment_world(&good, body.clone(), &GarmentSettings::default()).is_ok());
+    assert!(garment_world(
+        &good,
+        vec![body_collider(body.clone())],
+        &GarmentSettings::default()
+    )
+    .is_ok());
     let bad = parse(&flipped, Path::new("tube.json")).unwrap();
-    let Err(e) = garment_world(&bad, body, &GarmentSettings::default()) else {
+    let Err(e) = garment_world(&bad, vec![body_collider(body)], &GarmentSettings::default()) else {
         panic!("a panel facing in was accepted");
     };
     let msg = e.to_string();
