@@ -130,15 +130,20 @@ fn a_garment_scene_in_centimetres_places_the_pattern_by_its_keys() {
         scene.to_str().unwrap(),
         "-o",
         out.to_str().unwrap(),
+        "--glb",
+        "--preview",
         "--json",
     ]);
+    assert_eq!(
+        common::listing(&out),
+        ["column.obj", "moved.glb", "preview.png", "tube.obj"]
+    );
     assert_eq!(r["units"], "cm");
     assert!((r["spacing"].as_f64().unwrap() - 2.0).abs() < 1e-12);
     assert!(r["sew"]["done"].as_bool().unwrap(), "{}", r["sew"]);
     assert_eq!(r["garment"]["body_crossing_edges"], 0, "{}", r["garment"]);
     assert_eq!(r["garment"]["particles_inside"], 0, "{}", r["garment"]);
-    // Written in centimetres: the tube round the column's axis at x = 30 cm, its seams (the
-    // panels' sides, which started at x = +-30 cm about the pattern's axis) turned to y.
+    // Written in centimetres: the tube round the column's axis at x = 30 cm.
     let mesh = drapekit::io::read_mesh(&out.join("tube.obj"), &Default::default())
         .unwrap()
         .mesh;
@@ -149,6 +154,33 @@ fn a_garment_scene_in_centimetres_places_the_pattern_by_its_keys() {
         .fold([0.0; 2], |s, p| [s[0] + p.x / n, s[1] + p.y / n]);
     // Within a spacing of the axis: the tube is as round as the column (2 cm).
     assert!((c[0] - 30.0).abs() < 2.0 && c[1].abs() < 2.0, "{c:?}");
+    // Turned a quarter: the front panel (the back's particles come first) from in front of
+    // the axis (-y) to its right (+x). A half tube's centroid is 2 r / pi (12 cm) off the
+    // axis; half of that tells the quarter turn from none.
+    let back = r["panels"][0]["particles"].as_u64().unwrap() as usize;
+    assert_eq!(r["panels"][0]["name"], "back");
+    let front = &mesh.positions[back..];
+    let m = front.len() as f64;
+    let f = front
+        .iter()
+        .fold([0.0; 2], |s, p| [s[0] + p.x / m, s[1] + p.y / m]);
+    assert!(
+        f[0] - 30.0 > 6.0 && f[1].abs() < 6.0,
+        "front panel at {f:?}"
+    );
+    // The glTF file: the column and both panels, in metres.
+    let glb = drapekit::io::read_mesh(&out.join("moved.glb"), &Default::default())
+        .unwrap()
+        .mesh;
+    let column = drapekit::io::read_mesh(&out.join("column.obj"), &Default::default())
+        .unwrap()
+        .mesh;
+    assert_eq!(
+        glb.positions.len(),
+        column.positions.len() + mesh.positions.len()
+    );
+    let x_max = glb.positions.iter().map(|p| p.x).fold(0.0, f64::max);
+    assert!((x_max - 0.3).abs() < 0.25, "{x_max} m");
     let radius = mesh
         .positions
         .iter()
