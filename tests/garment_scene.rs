@@ -357,3 +357,23 @@ fn what_a_garment_scene_does_not_support_is_refused_by_key() {
         "{stderr}"
     );
 }
+
+#[test]
+fn a_panel_facing_into_the_objects_is_refused_under_the_patterns_key() {
+    // The tube's back panel without its half turn faces the column.
+    let dir = tube_folder();
+    let d = dir.path();
+    let text = std::fs::read_to_string(d.join("tube_specification.json")).unwrap();
+    let flipped = text.replace(
+        r#""translation": [0, 80, -30], "rotation": [0, 180, 0]"#,
+        r#""translation": [0, 80, -30], "rotation": [0, 0, 0]"#,
+    );
+    assert_ne!(flipped, text);
+    std::fs::write(d.join("tube_specification.json"), flipped).unwrap();
+    let stderr = refused_in(d, &tube_scene(""), &[]);
+    assert!(
+        stderr.contains("bad.toml: key 'garment.pattern': a panel is facing into the body")
+            && stderr.contains("back (180 degrees"),
+        "{stderr}"
+    );
+}

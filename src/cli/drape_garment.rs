@@ -74,6 +74,11 @@ pub(super) fn run(args: &DrapeArgs, sc: Scene, start: std::time::Instant) -> any
             let what = "during the garment run: a garment keeps no checkpoint; nothing was written";
             return Err(signals.interrupted(what).into());
         }
+        // The pattern against the objects (panels facing into the body, panels that make no
+        // cloth): before any simulation, under the pattern's key.
+        Err(e @ (gd::GarmentError::FacingIn(_) | gd::GarmentError::Assemble(_))) => {
+            bail!("{}: key 'garment.pattern': {e}", sc.path.display())
+        }
         Err(e) => bail!("{}: {e}", sc.path.display()),
         Ok(g) => g,
     };
