@@ -53,6 +53,9 @@ use crate::cloth::fabric::{Fabric, Kes};
 use crate::cloth::integrate::{Integrator, SolverSettings};
 use crate::cloth::pattern::{self, Pins};
 use crate::collide::grid::MAX_CELLS;
+use crate::garment::assemble::Placement;
+use crate::garment::drape::{GarmentSettings, SEW_ITERATIONS};
+use crate::garment::Pattern;
 use crate::math::{short, Point2, Vec3};
 use crate::mesh::transform::{Units, Up};
 use crate::sim::settings::{Cells, Stop};
@@ -130,11 +133,15 @@ impl SceneError {
 struct File {
     units: Option<String>,
     gravity: Option<[f64; 3]>,
+    #[serde(default)]
     solver: SolverFile,
     collision: Option<CollisionFile>,
     #[serde(default)]
     object: Vec<ObjectFile>,
+    #[serde(default)]
     piece: Vec<PieceFile>,
+    #[serde(default)]
+    garment: Vec<GarmentFile>,
     #[serde(default)]
     seam: Vec<SeamFile>,
     #[serde(default)]
@@ -167,7 +174,7 @@ pub const MAX_CG_ITERATIONS: u32 = 100_000;
 /// mesh file per piece, and `--glb` holds them all in memory.
 pub const MAX_FRAMES: u64 = 10_000;
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Default)]
 #[serde(deny_unknown_fields)]
 struct SolverFile {
     integrator: Option<String>,
@@ -243,6 +250,22 @@ struct PieceFile {
     pin_radius: Option<f64>,
     #[serde(default)]
     pin_segments: Vec<[[f64; 2]; 2]>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct GarmentFile {
+    pattern: String,
+    fabric: Option<String>,
+    spacing: Option<f64>,
+    translation: Option<[f64; 3]>,
+    rotation: Option<f64>,
+    friction: Option<f64>,
+    sew_max: Option<f64>,
+    settle_max: Option<f64>,
+    body_clearance: Option<f64>,
+    self_collision: Option<bool>,
+    cloth_friction: Option<f64>,
 }
 
 #[derive(Deserialize, Clone, Copy)]
@@ -361,6 +384,22 @@ pub struct PieceSpec {
     pub pins: Pins,
 }
 
+/// A scene's garment: a GarmentCode pattern sewn on the scene's objects and draped
+/// (`garment::drape`), as `drapekit garment` does on one body.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GarmentSpec {
+    /// The pattern file.
+    pub path: PathBuf,
+    /// The pattern, read and checked.
+    pub pattern: Pattern,
+    /// The garment's output name: the pattern file's stem without `_specification`.
+    pub name: String,
+    /// The fabric's name (a preset or a `[fabric.NAME]` table).
+    pub fabric_name: String,
+    /// Fabric, spacing, placement, friction, stages and solver (metres).
+    pub settings: GarmentSettings,
+}
+
 /// A validated scene. Lengths in metres.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Scene {
@@ -387,6 +426,8 @@ pub struct Scene {
     pub pieces: Vec<PieceSpec>,
     /// Seams between pieces' outline stretches (`sim::seams`).
     pub seams: Vec<SeamSpec>,
+    /// A garment sewn on the objects (then the scene has no pieces).
+    pub garment: Option<GarmentSpec>,
     /// Also write PLY.
     pub ply: bool,
     /// Write every k-th step as a frame.
@@ -722,7 +763,11 @@ pub fn parse(text: &str, path: &Path) -> Result<Scene, SceneError> {
         }
     }
     let s = &f.solver;
+    let garment_stop =
+        !f.garment.is_empty() && (s.steps, s.duration, s.until_rest) == (None, None, None);
     let stop = match (s.steps, s.duration, s.until_rest) {
+        // A garment's stages end its run (`garment.sew_max`, `garment.settle_max`).
+        _ if garment_stop => Stop::Steps(1),
         (Some(n), None, None) => {
             if n == 0 {
                 bad("solver.steps", "must be at least 1".into());
@@ -762,7 +807,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Scene, SceneError> {
             Stop::Steps(1)
         }
     };
-    if s.max_steps.is_some() && s.until_rest.is_none() {
+    if s.max_steps.is_some() && s.until_rest.is_none() && f.garment.is_empty() {
         bad("solver.max_steps", "goes with until_rest".into());
     }
     if let Some(n) = s.max_steps.filter(|&n| n > MAX_STEPS) {
@@ -771,7 +816,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Scene, SceneError> {
             format!("{n} steps: at most {MAX_STEPS}"),
         );
     }
-    let cells = match f.collision.and_then(|c| c.cells) {
+    let cells = match f.collision.as_ref().and_then(|c| c.cells.as_ref()) {
         None => Cells::Auto,
         Some(CellsFile::Word(w)) if w == "auto" => Cells::Auto,
         Some(CellsFile::Word(w)) => {
@@ -798,7 +843,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Scene, SceneError> {
             );
             Cells::Auto
         }
-        Some(CellsFile::Dims(d)) => Cells::Fixed(d),
+        Some(CellsFile::Dims(d)) => Cells::Fixed(*d),
     };
     let dir = path.parent().unwrap_or(Path::new("."));
     let mut objects = Vec::new();
@@ -902,8 +947,11 @@ pub fn parse(text: &str, path: &Path) -> Result<Scene, SceneError> {
         }
         fabrics.insert(name.clone(), fab);
     }
-    if f.piece.is_empty() {
-        bad("piece", "a scene needs at least one [[piece]]".into());
+    if f.piece.is_empty() && f.garment.is_empty() {
+        bad(
+            "piece",
+            "a scene needs at least one [[piece]] (or a [[garment]])".into(),
+        );
     }
     let mut pieces = Vec::new();
     for (i, p) in f.piece.iter().enumerate() {
@@ -1032,6 +1080,32 @@ pub fn parse(text: &str, path: &Path) -> Result<Scene, SceneError> {
             seams.push(SeamSpec { a, b });
         }
     }
+    let garment = match f.garment.as_slice() {
+        [] => None,
+        [g] => {
+            let context = GarmentContext {
+                dir,
+                to_m,
+                fabrics: &fabrics,
+                solver,
+                solver_file: &f.solver,
+            };
+            garment_spec(g, &context, &bad)
+        }
+        [_, more @ ..] => {
+            bad(
+                "garment",
+                format!(
+                    "{} [[garment]] tables: a scene sews one garment (run a scene per garment)",
+                    more.len() + 1
+                ),
+            );
+            None
+        }
+    };
+    if !f.garment.is_empty() {
+        garment_limits(&f, &bad);
+    }
     let out = f.output.unwrap_or(OutputFile {
         ply: None,
         frames: None,
@@ -1058,6 +1132,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Scene, SceneError> {
             objects,
             pieces,
             seams,
+            garment,
             ply: out.ply.unwrap_or(false),
             frames,
             disc_radius,
@@ -1103,4 +1178,175 @@ fn unknown_preset(name: &str) -> String {
         "unknown fabric '{name}': the presets are {}, or define it in a [fabric.{name}] table",
         names.join(", ")
     )
+}
+
+/// What a `[[garment]]` reads from the rest of the scene.
+struct GarmentContext<'a> {
+    /// The scene file's folder (the pattern is relative to it).
+    dir: &'a Path,
+    /// Metres per unit of the file.
+    to_m: f64,
+    /// The scene's `[fabric.NAME]` tables.
+    fabrics: &'a BTreeMap<String, Fabric>,
+    /// The scene's solver.
+    solver: SolverSettings,
+    /// The solver table as written (which keys were given).
+    solver_file: &'a SolverFile,
+}
+
+/// The scene's `[[garment]]`: the pattern read and checked, the settings validated, every
+/// problem given to `bad` by key. `None` when the pattern cannot be read.
+fn garment_spec(
+    g: &GarmentFile,
+    cx: &GarmentContext,
+    bad: &dyn Fn(&str, String),
+) -> Option<GarmentSpec> {
+    let k = |field: &str| format!("garment.{field}");
+    let mut settings = GarmentSettings::default();
+    let fabric_name = g.fabric.clone().unwrap_or_else(|| "cotton".into());
+    settings.assemble.fabric = match cx.fabrics.get(&fabric_name) {
+        Some(fb) => fb.clone(),
+        None => Fabric::preset(&fabric_name).unwrap_or_else(|| {
+            bad(&k("fabric"), unknown_preset(&fabric_name));
+            Fabric::cotton()
+        }),
+    };
+    let length = |v: Option<f64>| v.map(|v| v * cx.to_m);
+    if let Some(h) = length(g.spacing) {
+        settings.assemble.spacing = h;
+    }
+    let translation = g.translation.unwrap_or([0.0; 3]);
+    if !translation.iter().all(|v| v.is_finite()) {
+        bad(&k("translation"), "must be finite numbers".into());
+    }
+    let turn = g.rotation.unwrap_or(0.0);
+    if !turn.is_finite() {
+        bad(
+            &k("rotation"),
+            format!("must be a finite angle in degrees, got {}", short(turn)),
+        );
+    }
+    settings.assemble.placement = Placement {
+        turn_deg: turn,
+        translation: Vec3::from(translation) * cx.to_m,
+    };
+    settings.friction = g.friction.unwrap_or(settings.friction);
+    settings.sew_max = g.sew_max.unwrap_or(settings.sew_max);
+    settings.settle_max = g.settle_max.unwrap_or(settings.settle_max);
+    settings.body_clearance = length(g.body_clearance);
+    if g.self_collision == Some(false) {
+        settings.self_collision = None;
+    }
+    if let (Some(opts), Some(f)) = (&mut settings.self_collision, g.cloth_friction) {
+        opts.friction = f;
+    }
+    settings.solver = cx.solver;
+    if cx.solver_file.iterations.is_none() {
+        settings.solver.iterations = SEW_ITERATIONS;
+    }
+    for p in settings.problems() {
+        let key = match p.field {
+            "integrator" => "solver.integrator".to_string(),
+            "cloth_friction" if g.self_collision == Some(false) => k("self_collision"),
+            field => k(field),
+        };
+        if p.value.is_nan() {
+            bad(&key, p.message);
+        } else {
+            bad(&key, format!("{}, got {}", p.message, short(p.value)));
+        }
+    }
+    let path = cx.dir.join(&g.pattern);
+    if !path.is_file() {
+        bad(
+            &k("pattern"),
+            format!(
+                "{} does not exist (a GarmentCode specification JSON, relative to the scene file)",
+                path.display()
+            ),
+        );
+        return None;
+    }
+    let pattern = match crate::garment::read(&path) {
+        Ok(p) => p,
+        Err(e) => {
+            bad(&k("pattern"), e.to_string());
+            return None;
+        }
+    };
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "garment".into());
+    let name = stem
+        .strip_suffix("_specification")
+        .unwrap_or(&stem)
+        .to_string();
+    let name = if crate::io::is_safe_file_name(&name) {
+        name
+    } else {
+        "garment".into()
+    };
+    Some(GarmentSpec {
+        path,
+        pattern,
+        name,
+        fabric_name,
+        settings,
+    })
+}
+
+/// Refuses, by key, what a scene with a `[[garment]]` does not support.
+fn garment_limits(f: &File, bad: &dyn Fn(&str, String)) {
+    let with = "is not supported with a [[garment]]";
+    if !f.piece.is_empty() {
+        bad(
+            "piece",
+            format!("{with}: the garment's panels are the scene's cloth (drape pieces in a scene of their own)"),
+        );
+    }
+    if !f.seam.is_empty() {
+        bad(
+            "seam",
+            format!("{with}: the pattern's stitches are its seams"),
+        );
+    }
+    if f.object.is_empty() {
+        bad(
+            "object",
+            "a [[garment]] is sewn on the scene's objects: give at least one [[object]] (the first is the body)".into(),
+        );
+    }
+    if f.gravity.is_some() {
+        bad(
+            "gravity",
+            format!("{with}: a garment hangs under 9.81 m/s^2 down z (turn the body with its object's `up`)"),
+        );
+    }
+    let s = &f.solver;
+    for (key, given) in [
+        ("solver.steps", s.steps.is_some()),
+        ("solver.duration", s.duration.is_some()),
+        ("solver.until_rest", s.until_rest.is_some()),
+        ("solver.max_steps", s.max_steps.is_some()),
+    ] {
+        if given {
+            bad(
+                key,
+                format!("{with}: the garment's stages end its run (garment.sew_max, garment.settle_max)"),
+            );
+        }
+    }
+    if f.output.as_ref().is_some_and(|o| o.frames.is_some()) {
+        bad(
+            "output.frames",
+            format!("{with}: a garment's run writes no frames"),
+        );
+    }
+    if f.report.as_ref().is_some_and(|r| r.disc_radius.is_some()) {
+        bad(
+            "report.disc_radius",
+            format!("{with}: the Cusick coefficient is for a single piece"),
+        );
+    }
 }

@@ -300,10 +300,10 @@ for fv in "--body-clearance=-0.001" "--cloth-friction=NaN" "--friction=-1" "--sp
     case_ "$R" "garment: flag out of range ${fv%%=*}" garment p.json --body b.obj -o out "$fv"
 done
 new
-cp "$fixtures/tube_specification.json" .
+cp "$fixtures/garments/tube_specification.json" .
 case_ "$R" "garment: an explicit integrator" garment tube_specification.json --body no_such_body.obj -o out --integrator leapfrog
 new
-sed 's/"front"/"..\/front"/g' "$fixtures/tube_specification.json" >tube_specification.json
+sed 's/"front"/"..\/front"/g' "$fixtures/garments/tube_specification.json" >tube_specification.json
 case_ "Outputs stay where they belong" "garment: a panel named ../front with --panels" garment tube_specification.json --body no_such_body.obj -o out --panels
 
 # Other reader errors: batch plans (tests/batch.rs).

@@ -2,10 +2,11 @@
 //!
 //! The scene is read as a TOML table and changed in four places: `[solver]` takes the plan's
 //! keys (a stop given by the plan first removes the scene's `steps`, `duration`, `until_rest`
-//! and `max_steps`); every `[[object]]`'s mesh path is made absolute (the job's scene lives in
-//! `OUT/jobs/<id>/`); the body object's mesh and `up` become the body's and its `scale` is
-//! multiplied by the size's; every `[[piece]]` takes the fabric, and the plan's `[fabric.NAME]`
-//! table (if any) is copied into the scene. `drape` then validates the result as any scene.
+//! and `max_steps`); every `[[object]]`'s mesh path and every `[[garment]]`'s pattern path is
+//! made absolute (the job's scene lives in `OUT/jobs/<id>/`); the body object's mesh and `up`
+//! become the body's and its `scale` is multiplied by the size's; every `[[piece]]` and
+//! `[[garment]]` takes the fabric, and the plan's `[fabric.NAME]` table (if any) is copied into
+//! the scene. `drape` then validates the result as any scene.
 
 use super::body::BodyMesh;
 use super::plan::{Plan, SolverOverrides};
@@ -40,6 +41,7 @@ pub fn scene(plan: &Plan, file: &Path, changes: &SceneChanges) -> Result<String,
     solver(&mut t, &plan.solver);
     let dir = file.parent().unwrap_or(Path::new("."));
     objects(&mut t, dir, changes);
+    garments(&mut t, dir);
     if let Some((name, table)) = changes.fabric {
         fabric(&mut t, name, table);
     }
@@ -89,10 +91,25 @@ fn objects(t: &mut Table, dir: &Path, c: &SceneChanges) {
     }
 }
 
+/// Every `[[garment]]`'s pattern path made absolute (relative to the scene's folder `dir`).
+fn garments(t: &mut Table, dir: &Path) {
+    let Some(Value::Array(garments)) = t.get_mut("garment") else {
+        return;
+    };
+    for g in garments.iter_mut().filter_map(Value::as_table_mut) {
+        if let Some(Value::String(p)) = g.get("pattern") {
+            let abs = dir.join(p);
+            g.insert("pattern".into(), Value::String(abs.display().to_string()));
+        }
+    }
+}
+
 fn fabric(t: &mut Table, name: &str, table: Option<&Table>) {
-    if let Some(Value::Array(pieces)) = t.get_mut("piece") {
-        for p in pieces.iter_mut().filter_map(Value::as_table_mut) {
-            p.insert("fabric".into(), Value::String(name.into()));
+    for cloth in ["piece", "garment"] {
+        if let Some(Value::Array(items)) = t.get_mut(cloth) {
+            for p in items.iter_mut().filter_map(Value::as_table_mut) {
+                p.insert("fabric".into(), Value::String(name.into()));
+            }
         }
     }
     if let Some(tb) = table {
@@ -102,5 +119,24 @@ fn fabric(t: &mut Table, name: &str, table: Option<&Table>) {
         if let Some(f) = f.as_table_mut() {
             f.insert(name.into(), Value::Table(tb.clone()));
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_garment_scene_keeps_its_pattern_and_takes_the_fabric() {
+        let mut t: Table = toml::from_str(
+            "[[object]]\nmesh = \"body.obj\"\n[[garment]]\npattern = \"skirt.json\"\nfabric = \"silk\"\n",
+        )
+        .unwrap();
+        let dir = Path::new("/plans/scenes");
+        garments(&mut t, dir);
+        fabric(&mut t, "denim", None);
+        let g = &t["garment"].as_array().unwrap()[0];
+        assert_eq!(g["pattern"].as_str(), Some("/plans/scenes/skirt.json"));
+        assert_eq!(g["fabric"].as_str(), Some("denim"));
     }
 }

@@ -98,7 +98,13 @@ pub fn run(a: GarmentBench) -> anyhow::Result<()> {
         let pattern = crate::garment::read(&pattern_path)?;
         let (body, _) = read_body(&dir.join(format!("bodies/{b}.obj")), "auto")?;
         let t = Instant::now();
-        let g = gd::sew_and_drape(&pattern, body, &settings, &|_| {}, None)?;
+        let g = gd::sew_and_drape(
+            &pattern,
+            vec![gd::body_collider(body)],
+            &settings,
+            &|_| {},
+            None,
+        )?;
         let j = judge(&g);
         let row = GarmentRow {
             pattern: p.into(),

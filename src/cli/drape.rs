@@ -261,8 +261,8 @@ fn piece_mesh_at(world: &World, x: &[crate::math::Point3], piece: usize, to_unit
 }
 
 /// The file names of the objects as placed: each object's file stem, made unique against the
-/// pieces, the other objects, and the inputs that sit in the output folder.
-fn object_names(sc: &scene::Scene, out: &Path) -> Vec<String> {
+/// pieces (or the garment), the other objects, and the inputs that sit in the output folder.
+pub(super) fn object_names(sc: &scene::Scene, out: &Path) -> Vec<String> {
     let stem = |p: &Path| p.file_stem().map(|s| s.to_string_lossy().into_owned());
     let wanted: Vec<String> = sc
         .objects
@@ -270,7 +270,11 @@ fn object_names(sc: &scene::Scene, out: &Path) -> Vec<String> {
         .map(|o| stem(&o.mesh).unwrap_or_else(|| o.name.clone()))
         .collect();
     let mut taken: Vec<String> = sc.pieces.iter().map(|p| p.name.clone()).collect();
-    let inputs = std::iter::once(&sc.path).chain(sc.objects.iter().map(|o| &o.mesh));
+    taken.extend(sc.garment.iter().map(|g| g.name.clone()));
+    let garment = sc.garment.iter().map(|g| &g.path);
+    let inputs = std::iter::once(&sc.path)
+        .chain(sc.objects.iter().map(|o| &o.mesh))
+        .chain(garment);
     let beside = inputs.filter(|i| i.parent().is_some_and(|d| io::same_file(d, out)));
     taken.extend(beside.filter_map(|i| stem(i)));
     io::unique_file_names(&wanted, &taken, "object")
@@ -286,7 +290,7 @@ fn object_mesh(world: &World, i: usize, to_units: f64) -> TriMesh {
 
 /// Stages each object as placed (`OUT/<name>.obj`, and `.ply` when the pieces get one);
 /// returns each object's files.
-fn stage_objects(
+pub(super) fn stage_objects(
     sc: &scene::Scene,
     world: &World,
     names: &[String],
@@ -401,7 +405,7 @@ fn piece_rest(world: &World, piece: usize, to_units: f64) -> Vec<[f64; 2]> {
 
 /// Stages `OUT/preview.png`: every piece in the cloth's colour on the objects (grey), in the
 /// output's units, from the iso view. Returns its path.
-fn stage_preview(
+pub(super) fn stage_preview(
     world: &World,
     out: &Path,
     to_units: f64,
@@ -437,6 +441,9 @@ fn stage_preview(
 pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
     let start = std::time::Instant::now();
     let mut sc = scene::read(&args.scene)?;
+    if sc.garment.is_some() {
+        return super::drape_garment::run(&args, sc, start);
+    }
     let mut world = sim::load(&sc)?;
     sc.choose_step(world.stable_step)?;
     let placement = sim::placement_warnings(&world);
@@ -568,7 +575,7 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
         io::commit(std::mem::take(&mut staged))?;
         Ok((pieces, objects, preview))
     })();
-    let (pieces, mut object_files, preview) = match written {
+    let (pieces, object_files, preview) = match written {
         Ok(w) => w,
         Err(e) => {
             abandon(staged, out, existed);
@@ -582,22 +589,7 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
         );
     }
     let inside = sim::particles_inside(&world);
-    let clearance = sim::min_clearance(&world);
-    let objects: Vec<ObjectReport> = world
-        .colliders
-        .iter()
-        .enumerate()
-        .map(|(i, c)| ObjectReport {
-            name: c.name.clone(),
-            faces: c.mesh.faces.len(),
-            cells: c.dims,
-            grid_built_at: world.grid_built_at[i],
-            closed: c.closed,
-            particles_inside: inside[i],
-            min_clearance: clearance[i] * to_units,
-            files: std::mem::take(&mut object_files[i]),
-        })
-        .collect();
+    let objects = object_reports(&world, to_units, object_files);
     let (max_strain, mean_strain) = sim::strain(&world.model, &world.state.x);
     let m = &world.model;
     let report = DrapeReport {
@@ -669,8 +661,31 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
     )
 }
 
+/// Each object's report at the end of a run (lengths times `to_units`, from metres), with its
+/// files.
+pub(super) fn object_reports(
+    world: &World,
+    to_units: f64,
+    mut files: Vec<Vec<String>>,
+) -> Vec<ObjectReport> {
+    let inside = sim::particles_inside(world);
+    let clearance = sim::min_clearance(world);
+    (world.colliders.iter().enumerate())
+        .map(|(i, c)| ObjectReport {
+            name: c.name.clone(),
+            faces: c.mesh.faces.len(),
+            cells: c.dims,
+            grid_built_at: world.grid_built_at[i],
+            closed: c.closed,
+            particles_inside: inside[i],
+            min_clearance: clearance[i] * to_units,
+            files: std::mem::take(&mut files[i]),
+        })
+        .collect()
+}
+
 /// The stem of the scene file: the name of the checkpoint and of the glTF file.
-fn scene_stem(sc: &scene::Scene) -> String {
+pub(super) fn scene_stem(sc: &scene::Scene) -> String {
     sc.path
         .file_stem()
         .map_or("scene".into(), |s| s.to_string_lossy().into_owned())

@@ -6,6 +6,7 @@ use crate::collide::cloth::{SelfCollisionOptions, SelfStats};
 use crate::garment::drape::{self as gd, GarmentSettings, StageReport};
 use crate::garment::fit_check::{fit_check, FitCheck, FitCheckOptions, Ring};
 use crate::garment::measure::{self, Measures, Thresholds};
+use crate::garment::spec::Pattern;
 use crate::io::{self, ReadOptions};
 use crate::mesh::prepare::{prepare, PrepareOptions};
 use crate::mesh::transform::{change_up, change_up_point, Units, Up};
@@ -104,6 +105,21 @@ pub struct GarmentReport {
     pub spacing: f64,
     /// Whether the body is closed (inside tests, and moving seams out of it, need it).
     pub body_closed: bool,
+    /// Each closed ring of the pattern against the body's girth where it sits, checked before
+    /// the simulation (`garment::fit_check`).
+    pub fit_check: FitCheck,
+    /// The sewn and draped garment, measured and judged.
+    #[serde(flatten)]
+    pub outcome: GarmentOutcome,
+    /// Files written.
+    pub files: Vec<String>,
+    /// Wall time of the whole command, s.
+    pub wall_seconds: f64,
+}
+
+/// A sewn and draped garment as both `drapekit garment` and a scene's `[[garment]]` report it.
+#[derive(Debug, Serialize)]
+pub struct GarmentOutcome {
     /// Particles.
     pub particles: usize,
     /// Triangles.
@@ -127,19 +143,45 @@ pub struct GarmentReport {
     pub open_seams: Vec<measure::OpenSeam>,
     /// The stitches that gather a longer edge into a shorter one (`garment::gathers`).
     pub gathers: Vec<crate::garment::gathers::Gather>,
-    /// Each closed ring of the pattern against the body's girth where it sits, checked before
-    /// the simulation (`garment::fit_check`).
-    pub fit_check: FitCheck,
     /// The limits of the verdict.
     pub thresholds: Thresholds,
     /// `pass`, or `fail`.
     pub verdict: String,
     /// Why it failed.
     pub failed: Vec<String>,
-    /// Files written.
-    pub files: Vec<String>,
-    /// Wall time of the whole command, s.
-    pub wall_seconds: f64,
+}
+
+/// `g`, sewn from `pattern`, measured and judged for the report.
+pub(super) fn outcome(g: gd::Garment, pattern: &Pattern) -> (GarmentOutcome, sim::World) {
+    let Judged {
+        moving,
+        panels,
+        whole,
+        thresholds,
+        failed,
+    } = judge(&g);
+    let o = GarmentOutcome {
+        particles: g.world.model.len(),
+        triangles: g.world.model.triangles.len(),
+        seam_springs: g.seams.len(),
+        self_contact: g.world.self_contact.as_ref().map(|s| s.totals),
+        moving_fraction: moving,
+        garment: whole,
+        panels,
+        open_seams: measure::open_seams(
+            pattern,
+            &g.seams,
+            &g.world.state.x,
+            thresholds.seam_gap_max_mm,
+        ),
+        gathers: crate::garment::gathers::gathers(pattern),
+        thresholds,
+        verdict: if failed.is_empty() { "pass" } else { "fail" }.into(),
+        failed,
+        sew: g.sew,
+        drape: g.drape,
+    };
+    (o, g.world)
 }
 
 /// The body read, prepared, in metres (units from `spec`, or guessed from its height) and
@@ -193,33 +235,6 @@ pub(super) fn settings(args: &GarmentArgs) -> anyhow::Result<GarmentSettings> {
             names.join(", ")
         )
     })?;
-    let positive = |v: f64, flag: &str| -> anyhow::Result<()> {
-        if !(v.is_finite() && v > 0.0) {
-            bail!("{flag} {v}: must be a positive number");
-        }
-        Ok(())
-    };
-    positive(args.spacing, "--spacing")?;
-    check_stage("--sew-max", args.sew_max)?;
-    check_stage("--settle-max", args.settle_max)?;
-    for (v, flag) in [
-        (args.friction, "--friction"),
-        (args.cloth_friction, "--cloth-friction"),
-        (args.body_clearance.unwrap_or(0.0), "--body-clearance"),
-    ] {
-        if !(v.is_finite() && v >= 0.0) {
-            bail!("{flag} {v}: must be 0 or more");
-        }
-    }
-    if args.spacing < 0.002 || args.spacing > 0.1 {
-        bail!("--spacing {} m: use 0.002 to 0.1 m", args.spacing);
-    }
-    if args.integrator.is_explicit() {
-        bail!(
-            "--integrator {}: garments step at 10 ms; use projective-dynamics or implicit-euler",
-            args.integrator
-        );
-    }
     let mut s = GarmentSettings::default();
     s.solver.integrator = args.integrator;
     s.assemble.spacing = args.spacing;
@@ -232,16 +247,28 @@ pub(super) fn settings(args: &GarmentArgs) -> anyhow::Result<GarmentSettings> {
         friction: args.cloth_friction,
         ..SelfCollisionOptions::default()
     });
+    if let Some(p) = s.problems().into_iter().next() {
+        let flag = format!("--{}", p.field.replace('_', "-"));
+        if p.value.is_nan() {
+            bail!("{flag} {}", p.message);
+        }
+        bail!("{flag} {}: {}", crate::math::short(p.value), p.message);
+    }
     Ok(s)
 }
 
-/// The garment as one mesh in the pattern's frame (y up, m), and its panels' face ranges.
-fn garment_mesh(world: &sim::World) -> (TriMesh, Vec<(String, usize, usize)>) {
+/// The garment as one mesh with `up` up (the pattern's frame: y; a scene's: z), its lengths
+/// times `to_units` (from metres), and its panels' face ranges.
+pub(super) fn garment_mesh(
+    world: &sim::World,
+    up: Up,
+    to_units: f64,
+) -> (TriMesh, Vec<(String, usize, usize)>) {
     let positions = world
         .state
         .x
         .iter()
-        .map(|p| change_up_point(*p, Up::Z, Up::Y))
+        .map(|p| change_up_point(*p, Up::Z, up) * to_units)
         .collect();
     let m = &world.model;
     let groups = m
@@ -315,22 +342,25 @@ fn write_panels(
     Ok(files)
 }
 
-/// Writes the glTF file: each panel as cloth coloured by its strain against the flat pattern
-/// `rest` (one scale for the garment), and the body as placed, as the OBJ files have them.
-fn write_glb(
+/// Stages the glTF file: the bodies as placed, then each panel as cloth coloured by its strain
+/// against the flat pattern `rest` (one scale for the garment), as the OBJ files have them
+/// (glTF's metres, y up).
+pub(super) fn stage_glb(
     path: &Path,
     mesh: &TriMesh,
     rest: &[crate::math::Point2],
     groups: &[(String, usize, usize)],
-    body: (&str, &TriMesh),
+    bodies: &[(&str, &TriMesh)],
     inputs: &[&Path],
-) -> anyhow::Result<()> {
+) -> anyhow::Result<io::Staged> {
     use crate::io::gltf::{Part, Scene, Surface};
     use crate::render::strain::{strain_colours, strain_top, vertex_strain};
     let rest: Vec<[f64; 2]> = rest.iter().map(|q| [q.x, q.y]).collect();
     let strain = vertex_strain(mesh, &rest).unwrap_or_else(|_| vec![0.0; mesh.positions.len()]);
     let top = strain_top(strain.iter().copied());
-    let mut parts = vec![Part::new(body.0, body.1.clone(), Surface::Solid)];
+    let mut parts: Vec<Part> = (bodies.iter())
+        .map(|(name, m)| Part::new(*name, (*m).clone(), Surface::Solid))
+        .collect();
     for (name, m, of) in panel_meshes(mesh, groups) {
         let values: Vec<f64> = of.iter().map(|&v| strain[v as usize]).collect();
         let mut part = Part::new(name, m, Surface::Cloth);
@@ -341,8 +371,7 @@ fn write_glb(
         parts,
         frames: Vec::new(),
     };
-    crate::io::gltf::write_scene(path, &scene, inputs)?;
-    Ok(())
+    Ok(crate::io::gltf::stage_scene(path, &scene, inputs)?)
 }
 
 /// Writes an OBJ with a group per panel and each particle's flat pattern place (m) as `vt`.
@@ -391,16 +420,14 @@ pub(super) struct Judged {
     pub failed: Vec<String>,
 }
 
-/// Measures `g` and judges it by the default thresholds.
+/// Measures `g` and judges it by the default thresholds (inside: in any closed body).
 pub(super) fn judge(g: &gd::Garment) -> Judged {
     // The drape's last frame (1/60 s); a drape too short for one frame counts as moving.
     let moving = g.drape.moving_fraction.unwrap_or(1.0);
-    let c = &g.world.colliders[0];
-    let inside: Vec<bool> = if c.closed {
-        g.world.state.x.iter().map(|p| sim::inside(c, p)).collect()
-    } else {
-        vec![false; g.world.model.len()]
-    };
+    let closed: Vec<_> = g.world.colliders.iter().filter(|c| c.closed).collect();
+    let inside: Vec<bool> = (g.world.state.x.iter())
+        .map(|p| closed.iter().any(|c| sim::inside(c, p)))
+        .collect();
     let mut panels = measure::measures(&g.world, &g.seams, &inside);
     let whole = panels.pop().expect("the whole garment");
     let thresholds = Thresholds::default();
@@ -445,7 +472,13 @@ pub fn run(args: GarmentArgs) -> anyhow::Result<()> {
     super::remove_stale_temps(&[&args.output, &args.output.join("panels")]);
     let signals = super::interrupt::install()?;
     let cancel = Some(signals.cancel());
-    let g = match gd::sew_and_drape(&pattern, body, &settings, &progress, cancel) {
+    let g = match gd::sew_and_drape(
+        &pattern,
+        vec![gd::body_collider(body)],
+        &settings,
+        &progress,
+        cancel,
+    ) {
         Err(gd::GarmentError::Sim(crate::sim::SimError::Interrupted(_))) => {
             let what = "during the garment run: a garment keeps no checkpoint; nothing was written";
             return Err(signals.interrupted(what).into());
@@ -455,14 +488,8 @@ pub fn run(args: GarmentArgs) -> anyhow::Result<()> {
     if super::interactive() {
         eprintln!();
     }
-    let Judged {
-        moving,
-        panels,
-        whole,
-        thresholds,
-        failed,
-    } = judge(&g);
-    let c = &g.world.colliders[0];
+    let (outcome, world) = outcome(g, &pattern);
+    let c = &world.colliders[0];
     std::fs::create_dir_all(&args.output)
         .with_context(|| format!("cannot create {}", args.output.display()))?;
     let inputs = [args.pattern.as_path(), args.body.as_path()];
@@ -472,9 +499,9 @@ pub fn run(args: GarmentArgs) -> anyhow::Result<()> {
         .strip_suffix("_specification")
         .unwrap_or(&name)
         .to_string();
-    let (mesh, groups) = garment_mesh(&g.world);
+    let (mesh, groups) = garment_mesh(&world, Up::Y, 1.0);
     let garment_path = args.output.join(format!("{name}.obj"));
-    write_groups(&garment_path, &mesh, &g.world.model.rest, &groups, &inputs)?;
+    write_groups(&garment_path, &mesh, &world.model.rest, &groups, &inputs)?;
     let mut files = vec![garment_path.display().to_string()];
     if args.panels {
         files.extend(write_panels(
@@ -503,15 +530,9 @@ pub fn run(args: GarmentArgs) -> anyhow::Result<()> {
         .collect();
     if args.glb {
         let path = args.output.join(format!("{name}.glb"));
-        let rest = &g.world.model.rest;
-        write_glb(
-            &path,
-            &mesh,
-            rest,
-            &groups,
-            (&body_name, &body_mesh),
-            &inputs,
-        )?;
+        let rest = &world.model.rest;
+        let bodies = [(body_name.as_str(), &body_mesh)];
+        stage_glb(&path, &mesh, rest, &groups, &bodies, &inputs)?.commit()?;
         files.push(path.display().to_string());
     }
     if args.preview {
@@ -531,26 +552,8 @@ pub fn run(args: GarmentArgs) -> anyhow::Result<()> {
         fabric: args.fabric.clone(),
         spacing: args.spacing,
         body_closed: c.closed,
-        particles: g.world.model.len(),
-        triangles: g.world.model.triangles.len(),
-        seam_springs: g.seams.len(),
-        self_contact: g.world.self_contact.as_ref().map(|s| s.totals),
-        sew: g.sew,
-        drape: g.drape,
-        moving_fraction: moving,
-        garment: whole,
-        panels,
-        open_seams: measure::open_seams(
-            &pattern,
-            &g.seams,
-            &g.world.state.x,
-            thresholds.seam_gap_max_mm,
-        ),
-        gathers: crate::garment::gathers::gathers(&pattern),
         fit_check: fit,
-        thresholds,
-        verdict: if failed.is_empty() { "pass" } else { "fail" }.into(),
-        failed,
+        outcome,
         files,
         wall_seconds: start.elapsed().as_secs_f64(),
     };
@@ -594,11 +597,26 @@ fn too_short(r: &Ring) -> String {
 fn print_summary(r: &GarmentReport) {
     println!(
         "{}: {} particles, {} seam springs, {} on {}",
-        r.pattern, r.particles, r.seam_springs, r.fabric, r.body
+        r.pattern, r.outcome.particles, r.outcome.seam_springs, r.fabric, r.body
     );
     for a in &r.assumed {
         println!("  assumed: {a}");
     }
+    let f = &r.fit_check;
+    println!(
+        "  fit check (before the drape): {} rings, {} judged, {} too short for the body",
+        f.rings.len(),
+        f.rings.iter().filter(|r| r.judged).count(),
+        f.too_short
+    );
+    for ring in f.rings.iter().filter(|r| r.fits == Some(false)) {
+        println!("    {}", too_short(ring));
+    }
+    print_outcome(&r.outcome, r.wall_seconds);
+}
+
+/// The summary's lines on the sewing, the drape, the measures and the verdict.
+pub(super) fn print_outcome(r: &GarmentOutcome, wall_seconds: f64) {
     println!(
         "  sewing: {:.2} s simulated ({}), largest seam gap {:.2} mm, seams at {} m/h^2",
         r.sew.time,
@@ -634,17 +652,7 @@ fn print_summary(r: &GarmentReport) {
             ""
         }
     );
-    let f = &r.fit_check;
-    println!(
-        "  fit check (before the drape): {} rings, {} judged, {} too short for the body",
-        f.rings.len(),
-        f.rings.iter().filter(|r| r.judged).count(),
-        f.too_short
-    );
-    for ring in f.rings.iter().filter(|r| r.fits == Some(false)) {
-        println!("    {}", too_short(ring));
-    }
-    println!("  verdict: {} in {:.1} s", r.verdict, r.wall_seconds);
+    println!("  verdict: {} in {:.1} s", r.verdict, wall_seconds);
     for f in &r.failed {
         println!("    failed: {f}");
     }

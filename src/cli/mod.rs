@@ -14,6 +14,7 @@ mod bench_solver;
 mod bench_speed;
 mod convert;
 mod drape;
+mod drape_garment;
 mod fit;
 mod garment;
 mod inspect;

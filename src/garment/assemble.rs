@@ -25,8 +25,9 @@ use super::spec::Pattern;
 use crate::cloth::elements::{Bend, Spring, SpringKind};
 use crate::cloth::fabric::Fabric;
 use crate::cloth::pattern::{self, PatternError, Piece, Pins};
-use crate::math::{Point2, Point3, Vec2};
+use crate::math::{Point2, Point3, Vec2, Vec3};
 use crate::mesh::transform::{change_up_point, Up};
+use nalgebra::{Rotation3, Vector3};
 use std::collections::HashMap;
 
 /// Seam springs' constant relative to the fabric's stretch constant (warp and weft's larger).
@@ -39,6 +40,8 @@ pub struct AssembleOptions {
     pub spacing: f64,
     /// The fabric of every panel (default cotton).
     pub fabric: Fabric,
+    /// Where the whole pattern goes (default: where its panels' placements put it).
+    pub placement: Placement,
 }
 
 impl Default for AssembleOptions {
@@ -46,7 +49,41 @@ impl Default for AssembleOptions {
         AssembleOptions {
             spacing: 0.01,
             fabric: Fabric::cotton(),
+            placement: Placement::default(),
         }
+    }
+}
+
+/// A rigid motion of the whole pattern in drapekit's frame (metres, z up), after its panels'
+/// own placements: `p -> Rz(turn) p + translation`, a turn about the vertical axis through the
+/// origin, then a shift. The default leaves the pattern where its file puts it.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Placement {
+    /// The turn about the z axis, degrees, counter-clockwise seen from above.
+    pub turn_deg: f64,
+    /// The shift, m.
+    pub translation: Vec3,
+}
+
+impl Placement {
+    fn rotation(&self) -> Rotation3<f64> {
+        Rotation3::from_axis_angle(&Vector3::z_axis(), self.turn_deg.to_radians())
+    }
+
+    /// Where `p` goes.
+    pub fn apply(&self, p: Point3) -> Point3 {
+        if *self == Placement::default() {
+            return p;
+        }
+        self.rotation() * p + self.translation
+    }
+
+    /// Where `p` came from.
+    pub fn unapply(&self, p: Point3) -> Point3 {
+        if *self == Placement::default() {
+            return p;
+        }
+        self.rotation().inverse() * (p - self.translation)
     }
 }
 
@@ -86,12 +123,19 @@ pub enum AssembleError {
     Spacing { spacing: f64 },
 }
 
-/// The pattern's units per metre, its y-up frame, and a panel's placement, as one map from
-/// panel coordinates (metres) to drapekit's frame.
-fn placer(pattern: &Pattern, panel: usize) -> impl Fn(&Point2) -> Point3 + '_ {
+/// The pattern's units per metre, its y-up frame, a panel's placement and the whole
+/// pattern's, as one map from panel coordinates (metres) to drapekit's frame.
+fn placer(
+    pattern: &Pattern,
+    panel: usize,
+    placement: Placement,
+) -> impl Fn(&Point2) -> Point3 + '_ {
     let p = &pattern.panels[panel];
     let (r, t) = (p.rotation(), p.translation / pattern.units_in_meter);
-    move |q: &Point2| change_up_point(r * Point3::new(q.x, q.y, 0.0) + t, Up::Y, Up::Z)
+    move |q: &Point2| {
+        let placed = change_up_point(r * Point3::new(q.x, q.y, 0.0) + t, Up::Y, Up::Z);
+        placement.apply(placed)
+    }
 }
 
 /// Makes cloth of `pattern`: every panel a piece, every stitch seam springs. Every panel's
@@ -119,7 +163,7 @@ pub fn assemble(
             Ok(piece) => {
                 outline_particle.push(sample_particles(&piece, &outline, first));
                 first += piece.flat.len() as u32;
-                let place = placer(pattern, k);
+                let place = placer(pattern, k, opts.placement);
                 let placed = piece.flat.iter().map(&place).collect();
                 pieces.push((panel.name.clone(), piece, opts.fabric.clone(), placed));
             }

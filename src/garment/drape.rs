@@ -20,8 +20,10 @@
 //! [`REST_SPEED`] over [`REST_FRAMES`] frames of 1/60 s in a row) or at `settle_max`. Cloth against cloth
 //! is on in both stages (`self_collision`).
 //!
-//! The body is a fixed collider in drapekit's frame (metres, z up); `body_frame` brings a
-//! GarmentCode body (y up) there.
+//! The body is a fixed collider in drapekit's frame (metres, z up): the `garment` command
+//! turns a GarmentCode body (y up) there, a scene's `[[object]]`s are placed by the scene
+//! (`[[garment]]`, with the whole pattern placed by `assemble::Placement`). With several
+//! bodies, the first is the one the garment is sewn on (facing, meeting points).
 
 use super::assemble::{
     assemble, seam_gaps, seam_springs, AssembleError, AssembleOptions, SeamPair,
@@ -144,6 +146,69 @@ impl Default for GarmentSettings {
     }
 }
 
+/// A garment setting out of range.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SettingProblem {
+    /// The setting: `spacing`, `friction`, `cloth_friction`, `body_clearance`, `sew_max`,
+    /// `settle_max` or `integrator`.
+    pub field: &'static str,
+    /// Its value (NaN for the integrator).
+    pub value: f64,
+    /// What it must be.
+    pub message: String,
+}
+
+/// The finest and the coarsest particle spacing of a garment, m.
+pub const SPACING_RANGE: [f64; 2] = [0.002, 0.1];
+
+impl GarmentSettings {
+    /// Every setting out of range, before any work: the spacing within [`SPACING_RANGE`],
+    /// frictions and the body clearance 0 or more, each stage positive and at most
+    /// [`MAX_STAGE_SECONDS`], an integrator that steps at 10 ms (not an explicit one).
+    pub fn problems(&self) -> Vec<SettingProblem> {
+        let mut out = Vec::new();
+        let mut bad = |field, value, message: String| {
+            out.push(SettingProblem {
+                field,
+                value,
+                message,
+            })
+        };
+        let h = self.assemble.spacing;
+        let [lo, hi] = SPACING_RANGE;
+        if !(h.is_finite() && (lo..=hi).contains(&h)) {
+            bad("spacing", h, format!("must be {lo} to {hi} m"));
+        }
+        let cloth_friction = self.self_collision.map_or(0.0, |o| o.friction);
+        let clearance = self.body_clearance.unwrap_or(0.0);
+        for (field, v) in [
+            ("friction", self.friction),
+            ("cloth_friction", cloth_friction),
+            ("body_clearance", clearance),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                bad(field, v, "must be 0 or more".into());
+            }
+        }
+        for (field, t) in [("sew_max", self.sew_max), ("settle_max", self.settle_max)] {
+            if !(t.is_finite() && t > 0.0 && t <= MAX_STAGE_SECONDS) {
+                let m = format!(
+                    "must be a positive number of simulated seconds, at most {MAX_STAGE_SECONDS}"
+                );
+                bad(field, t, m);
+            }
+        }
+        if self.solver.integrator.is_explicit() {
+            let m = format!(
+                "{}: garments step at 10 ms; use projective-dynamics or implicit-euler",
+                self.solver.integrator
+            );
+            bad("integrator", f64::NAN, m);
+        }
+        out
+    }
+}
+
 /// What one stage did.
 #[derive(Debug, Clone, Default, Serialize)]
 pub struct StageReport {
@@ -185,7 +250,7 @@ pub enum GarmentError {
     /// The pattern does not make cloth.
     #[error("{}", .0.iter().map(|e| e.to_string()).collect::<Vec<_>>().join("\n"))]
     Assemble(Vec<AssembleError>),
-    /// The body has no faces.
+    /// There is no body, or it has no faces.
     #[error("the body has no faces")]
     EmptyBody,
     /// Panels whose outline faces into the body (`facing`): each name and the angle between
@@ -197,18 +262,31 @@ pub enum GarmentError {
     Sim(#[from] SimError),
 }
 
-/// The world of a garment on a body (metres, z up): the pattern assembled with its seams,
-/// gravity off (sewing comes first); and the seams' full constant, N/m.
+/// The body of the `garment` command as a collider: its mesh (metres, z up), the automatic
+/// grid, no friction of its own (the garment's `friction` applies).
+pub fn body_collider(body: TriMesh) -> Collider {
+    let dims = Collider::auto_dims(&body);
+    Collider::new("body".into(), body, dims, 0.0, None)
+}
+
+/// The world of a garment on `bodies` (metres, z up; the first is the body the garment is
+/// sewn on: the panels' facing is judged against its vertical axis, and the seams' meeting
+/// points go round it; the others only collide): the pattern assembled with its seams,
+/// gravity off (sewing comes first); and the seams' full constant, N/m. Every body keeps the
+/// cloth its fabric's thickness and the body clearance off, and gets the garment's friction
+/// unless it has its own.
 pub fn garment_world(
     pattern: &Pattern,
-    body: TriMesh,
+    mut bodies: Vec<Collider>,
     settings: &GarmentSettings,
 ) -> Result<(World, Vec<SeamPair>, f64), GarmentError> {
-    let Some(bbox) = body.bbox().filter(|_| !body.faces.is_empty()) else {
+    let Some(body) = bodies.first().filter(|b| !b.mesh.faces.is_empty()) else {
         return Err(GarmentError::EmptyBody);
     };
-    // The body's vertical axis in the pattern's frame (y up) and units.
-    let c = change_up_point(bbox.center(), Up::Z, Up::Y).coords * pattern.units_in_meter;
+    // The body's vertical axis in the pattern's own frame (y up) and units: the pattern's
+    // placement undone.
+    let centre = settings.assemble.placement.unapply(body.bbox.center());
+    let c = change_up_point(centre, Up::Z, Up::Y).coords * pattern.units_in_meter;
     let facing = super::facing::facing_in(pattern, [c.x, c.z]);
     if !facing.is_empty() {
         return Err(GarmentError::FacingIn(facing));
@@ -218,19 +296,15 @@ pub fn garment_world(
     model.add_springs(&seam_springs(&assembled));
     model.add_bends(&assembled.seam_bends);
     let fabric = &settings.assemble.fabric;
-    let dims = Collider::auto_dims(&body);
     let clearance = settings
         .body_clearance
         .unwrap_or(AUTO_CLEARANCE * settings.assemble.spacing);
-    let mut collider = Collider::new(
-        "body".into(),
-        body,
-        dims,
-        fabric.thickness + clearance,
-        Some(settings.friction),
-    );
-    collider.clearance = clearance;
-    let mut world = World::new(model, x, vec![collider], settings.solver.integrator);
+    for b in &mut bodies {
+        b.margin = fabric.thickness + clearance;
+        b.clearance = clearance;
+        b.friction = Some(b.friction.unwrap_or(settings.friction));
+    }
+    let mut world = World::new(model, x, bodies, settings.solver.integrator);
     if let Some(opts) = settings.self_collision {
         let pairs: Vec<[u32; 2]> = assembled.seams.iter().map(|s| [s.a, s.b]).collect();
         world.self_contact = Some(SelfContact::new(&world.model, &pairs, opts));
@@ -449,16 +523,16 @@ fn moved_fraction(before: &[Point3], after: &[Point3], limit: f64) -> f64 {
     moving as f64 / before.len().max(1) as f64
 }
 
-/// Sews and drapes `pattern` on `body` (metres, z up). Once `cancel` is set, the run ends
-/// after the step it is in with `SimError::Interrupted` (a garment keeps no checkpoint).
+/// Sews and drapes `pattern` on `bodies` (as [`garment_world`]). Once `cancel` is set, the run
+/// ends after the step it is in with `SimError::Interrupted` (a garment keeps no checkpoint).
 pub fn sew_and_drape(
     pattern: &Pattern,
-    body: TriMesh,
+    bodies: Vec<Collider>,
     settings: &GarmentSettings,
     progress: &dyn Fn(f64),
     cancel: Option<&AtomicBool>,
 ) -> Result<Garment, GarmentError> {
-    let (mut world, seams, seam_k) = garment_world(pattern, body, settings)?;
+    let (mut world, seams, seam_k) = garment_world(pattern, bodies, settings)?;
     let sew_report = sew(&mut world, &seams, settings, progress, cancel)?;
     let drape = settle(&mut world, &seams, seam_k, settings, cancel)?;
     Ok(Garment {

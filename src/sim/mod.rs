@@ -45,6 +45,7 @@ use crate::collide::Collider;
 use crate::math::{Aabb, Point3, Vec3};
 use crate::mesh::prepare::{prepare, PrepareOptions};
 use crate::mesh::transform::{change_up, Up};
+use crate::mesh::TriMesh;
 use crate::par;
 use crate::scene::{Scene, SceneError};
 use serde::Serialize;
@@ -199,6 +200,49 @@ pub fn load(scene: &Scene) -> Result<World, SceneError> {
             }),
         }
     }
+    let meshes = read_objects(scene, &mut errors);
+    let sewn = if errors.is_empty() {
+        scene_seams(scene, &pieces, &mut errors)
+    } else {
+        Vec::new()
+    };
+    if !errors.is_empty() {
+        return Err(SceneError::combine(&scene.path, errors));
+    }
+    let (mut model, x) = ClothModel::assemble(&pieces, scene.gravity);
+    let springs: Vec<Spring> = sewn
+        .iter()
+        .map(|&([a, b], k)| Spring {
+            a,
+            b,
+            rest: 0.0,
+            k,
+            kind: SpringKind::Seam,
+        })
+        .collect();
+    model.add_springs(&springs);
+    let margin = scene
+        .pieces
+        .iter()
+        .map(|p| p.fabric.thickness)
+        .fold(0.0, f64::max);
+    let colliders = colliders(scene, meshes, margin);
+    let pairs: Vec<[u32; 2]> = sewn.iter().map(|s| s.0).collect();
+    let mut world = World::new(model, x, colliders, scene.solver.integrator);
+    if !pairs.is_empty() {
+        // Sewn pieces fold against each other: cloth against cloth, as for garments.
+        world.self_contact = Some(SelfContact::new(
+            &world.model,
+            &pairs,
+            crate::collide::cloth::SelfCollisionOptions::default(),
+        ));
+    }
+    Ok(world)
+}
+
+/// The scene's objects read, prepared and placed (metres, z up); each problem goes into
+/// `errors`.
+fn read_objects(scene: &Scene, errors: &mut Vec<SceneError>) -> Vec<TriMesh> {
     let to_m = crate::mesh::transform::Units::factor(scene.units, crate::mesh::transform::Units::M);
     let mut meshes = Vec::new();
     for (i, o) in scene.objects.iter().enumerate() {
@@ -231,32 +275,12 @@ pub fn load(scene: &Scene) -> Result<World, SceneError> {
             }),
         }
     }
-    let sewn = if errors.is_empty() {
-        scene_seams(scene, &pieces, &mut errors)
-    } else {
-        Vec::new()
-    };
-    if !errors.is_empty() {
-        return Err(SceneError::combine(&scene.path, errors));
-    }
-    let (mut model, x) = ClothModel::assemble(&pieces, scene.gravity);
-    let springs: Vec<Spring> = sewn
-        .iter()
-        .map(|&([a, b], k)| Spring {
-            a,
-            b,
-            rest: 0.0,
-            k,
-            kind: SpringKind::Seam,
-        })
-        .collect();
-    model.add_springs(&springs);
-    let margin = scene
-        .pieces
-        .iter()
-        .map(|p| p.fabric.thickness)
-        .fold(0.0, f64::max);
-    let colliders = scene
+    meshes
+}
+
+/// The objects' colliders (grid cells as the scene says), keeping the cloth `margin` (m) off.
+fn colliders(scene: &Scene, meshes: Vec<TriMesh>, margin: f64) -> Vec<Collider> {
+    scene
         .objects
         .iter()
         .zip(meshes)
@@ -267,18 +291,18 @@ pub fn load(scene: &Scene) -> Result<World, SceneError> {
             };
             Collider::new(o.name.clone(), mesh, dims, margin, o.friction)
         })
-        .collect();
-    let pairs: Vec<[u32; 2]> = sewn.iter().map(|s| s.0).collect();
-    let mut world = World::new(model, x, colliders, scene.solver.integrator);
-    if !pairs.is_empty() {
-        // Sewn pieces fold against each other: cloth against cloth, as for garments.
-        world.self_contact = Some(SelfContact::new(
-            &world.model,
-            &pairs,
-            crate::collide::cloth::SelfCollisionOptions::default(),
-        ));
+        .collect()
+}
+
+/// The scene's objects as colliders, every mesh's problem reported together: what a
+/// `[[garment]]` is sewn on (`garment::drape::garment_world` sets their margins).
+pub fn load_objects(scene: &Scene) -> Result<Vec<Collider>, SceneError> {
+    let mut errors = Vec::new();
+    let meshes = read_objects(scene, &mut errors);
+    if !errors.is_empty() {
+        return Err(SceneError::combine(&scene.path, errors));
     }
-    Ok(world)
+    Ok(colliders(scene, meshes, 0.0))
 }
 
 /// The scene's seams (`seams`) as particle pairs of the assembled cloth (pieces in order) with

@@ -171,3 +171,48 @@ pub fn read_png(path: &Path) -> (usize, usize, Vec<[u8; 3]>) {
         .collect();
     (info.width as usize, info.height as usize, pixels)
 }
+
+/// A closed cylinder about the z axis (drapekit's frame) of radius `r` from z0 to z1, its side
+/// cut in `n` facets.
+pub fn cylinder(r: f64, z0: f64, z1: f64, n: usize) -> TriMesh {
+    frustum(r, r, z0, z1, n)
+}
+
+/// A closed frustum about the z axis: `n`-gons of radius `r0` at z0 and `r1` at z1. Its
+/// section at z is the `n`-gon of radius `r0 + (r1 - r0) (z - z0) / (z1 - z0)`, of perimeter
+/// `2 n r sin(pi / n)` (each side face is a planar trapezoid).
+pub fn frustum(r0: f64, r1: f64, z0: f64, z1: f64, n: usize) -> TriMesh {
+    let mut p = Vec::new();
+    for &(r, z) in &[(r0, z0), (r1, z1)] {
+        for k in 0..n {
+            let a = std::f64::consts::TAU * k as f64 / n as f64;
+            p.push(Point3::new(r * a.cos(), r * a.sin(), z));
+        }
+    }
+    p.push(Point3::new(0.0, 0.0, z0));
+    p.push(Point3::new(0.0, 0.0, z1));
+    let (c0, c1) = (2 * n as u32, 2 * n as u32 + 1);
+    let mut f = Vec::new();
+    for k in 0..n as u32 {
+        let j = (k + 1) % n as u32;
+        let n = n as u32;
+        f.push([k, j, n + j]);
+        f.push([k, n + j, n + k]);
+        f.push([c0, j, k]);
+        f.push([c1, n + k, n + j]);
+    }
+    TriMesh::new(p, f)
+}
+
+/// Writes `mesh` (drapekit's frame, z up) as an OBJ in GarmentCode's frame (y up): the file's
+/// `(x, y, z)` is drapekit's `(x, z, -y)`.
+pub fn write_y_up_obj(mesh: &TriMesh, path: &Path) {
+    let mut obj = String::new();
+    for p in &mesh.positions {
+        obj += &format!("v {} {} {}\n", p.x, p.z, -p.y);
+    }
+    for f in &mesh.faces {
+        obj += &format!("f {} {} {}\n", f[0] + 1, f[1] + 1, f[2] + 1);
+    }
+    std::fs::write(path, obj).unwrap();
+}
