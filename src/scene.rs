@@ -1250,7 +1250,7 @@ fn garment_spec(
             "cloth_friction" if g.self_collision == Some(false) => k("self_collision"),
             field => k(field),
         };
-        if p.value.is_nan() {
+        if p.field == "integrator" {
             bad(&key, p.message);
         } else {
             bad(&key, format!("{}, got {}", p.message, short(p.value)));

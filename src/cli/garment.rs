@@ -249,7 +249,7 @@ pub(super) fn settings(args: &GarmentArgs) -> anyhow::Result<GarmentSettings> {
     });
     if let Some(p) = s.problems().into_iter().next() {
         let flag = format!("--{}", p.field.replace('_', "-"));
-        if p.value.is_nan() {
+        if p.field == "integrator" {
             bail!("{flag} {}", p.message);
         }
         bail!("{flag} {}: {}", crate::math::short(p.value), p.message);

@@ -187,7 +187,7 @@ impl GarmentSettings {
             ("body_clearance", clearance),
         ] {
             if !(v.is_finite() && v >= 0.0) {
-                bad(field, v, "must be 0 or more".into());
+                bad(field, v, "must be a number, 0 or more".into());
             }
         }
         for (field, t) in [("sew_max", self.sew_max), ("settle_max", self.settle_max)] {
