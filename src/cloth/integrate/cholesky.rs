@@ -264,6 +264,12 @@ fn sweeps(raw: &SymbolicCholeskyRaw<usize>, l: &[f64], x: &mut [Row], dir: Sweep
     match raw {
         SymbolicCholeskyRaw::Simplicial(s) => {
             let f = s.factor();
+            #[cfg(target_arch = "x86_64")]
+            if std::arch::is_x86_feature_detected!("avx") {
+                // SAFETY: the processor has AVX (checked just above).
+                unsafe { simplicial_avx(f.col_ptr(), f.row_idx(), l, x, dir) };
+                return;
+            }
             simplicial(f.col_ptr(), f.row_idx(), l, x, dir);
         }
         SymbolicCholeskyRaw::Supernodal(s) => {
@@ -426,6 +432,12 @@ unsafe fn forward_avx(sym: &Supernodal, l: &[f64], nodes: Range<usize>, p: Part,
 #[target_feature(enable = "avx")]
 unsafe fn backward_avx(sym: &Supernodal, l: &[f64], nodes: Range<usize>, p: Part, top: &[Row]) {
     backward_nodes(sym, l, nodes, p, top);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+unsafe fn simplicial_avx(col: &[usize], row: &[usize], l: &[f64], x: &mut [Row], dir: Sweep) {
+    simplicial(col, row, l, x, dir);
 }
 
 #[inline(always)]
