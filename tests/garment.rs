@@ -133,6 +133,78 @@ fn a_seam_across_a_bar_is_sewn_over_it_not_through_it() {
     assert!(whole.max_strain < 0.05, "{whole:?}");
 }
 
+#[test]
+fn the_spots_say_where_a_garment_fails() {
+    use drapekit::garment::measure::{crossings, Thresholds};
+    use drapekit::garment::spots::{spots, SpotKind};
+    let pattern = parse(SHOULDER, Path::new("shoulder.json")).unwrap();
+    let mut settings = GarmentSettings::default();
+    settings.assemble.spacing = 0.02;
+    let (bar, _, zc) = shoulder_bar();
+    let (mut world, seams, _) =
+        garment_world(&pattern, vec![body_collider(bar)], &settings).unwrap();
+    let piece = |name: &str| world.model.pieces.iter().find(|p| p.name == name).unwrap();
+    // A particle in the middle of the front panel pulled 5 cm out of it (every spring at it
+    // strained far past 5%), and one of the back panel's moved onto the bar's axis (inside it,
+    // its edges through the bar's surface).
+    let (front, back) = (piece("front").clone(), piece("back").clone());
+    let near = |p: &drapekit::cloth::model::PieceRange, at: Point3| {
+        (p.first..p.first + p.count)
+            .min_by(|&a, &b| {
+                let d = |i: usize| (world.state.x[i] - at).norm();
+                d(a).total_cmp(&d(b))
+            })
+            .unwrap()
+    };
+    let pulled = near(&front, Point3::new(0.0, -0.15, 1.0));
+    let sunk = near(&back, Point3::new(0.1, 0.15, 1.1));
+    world.state.x[pulled].y -= 0.05;
+    world.state.x[sunk] = Point3::new(world.state.x[sunk].x, 0.0, zc);
+    let (x, c) = (&world.state.x, &world.colliders[0]);
+    let inside: Vec<bool> = x.iter().map(|p| drapekit::sim::inside(c, p)).collect();
+    assert_eq!(inside.iter().filter(|&&i| i).count(), 1);
+    let found = crossings(&world, &seams);
+    let (spots, left_out) = spots(&world, &inside, &found, &Thresholds::default());
+    assert_eq!(left_out, 0);
+    let of = |k: SpotKind| spots.iter().filter(|s| s.kind == k).collect::<Vec<_>>();
+    // One spot of each failed kind, on the right panel, where the particle went.
+    let (strain, inner, body) = (
+        of(SpotKind::Strain),
+        of(SpotKind::Inside),
+        of(SpotKind::BodyCrossing),
+    );
+    // Two strain spots: the sunk particle's springs are strained too, more: first.
+    assert_eq!(
+        (strain.len(), inner.len(), body.len()),
+        (2, 1, 1),
+        "{spots:?}"
+    );
+    assert!(of(SpotKind::SelfCrossing).is_empty(), "{spots:?}");
+    let dist = |a: [f64; 3], p: Point3| (Point3::from(a) - p).norm();
+    assert_eq!([&strain[0].panel, &strain[1].panel], ["back", "front"]);
+    assert!(strain[0].worst > strain[1].worst);
+    // Its springs' midpoints are half way to the panel, 16 cm from the sunk particle.
+    assert!(dist(strain[0].at, x[sunk]) < 0.09, "{:?}", strain[0]);
+    let strain = &strain[1..];
+    // Its four thread neighbours lie symmetric about where it was: the springs' midpoints
+    // average half way back, 2.5 cm.
+    let half_way = x[pulled] + Vec3::new(0.0, 0.025, 0.0);
+    assert!(dist(strain[0].at, half_way) < 1e-9, "{:?}", strain[0]);
+    // Every spring at the particle: its thread neighbours (and more than the verdict's 5%).
+    let at_pulled = (world.model.springs.iter())
+        .filter(|s| s.kind == drapekit::cloth::elements::SpringKind::Stretch)
+        .filter(|s| s.a as usize == pulled || s.b as usize == pulled)
+        .count();
+    assert_eq!(strain[0].count, at_pulled);
+    assert!(strain[0].worst.unwrap() > 1.0, "{:?}", strain[0]);
+    assert_eq!((inner[0].panel.as_str(), inner[0].count), ("back", 1));
+    assert!(dist(inner[0].at, x[sunk]) < 1e-12);
+    assert_eq!(body[0].panel, "back");
+    assert_eq!(body[0].count, found.body.len());
+    assert!(dist(body[0].at, x[sunk]) < 0.09, "{:?}", body[0]);
+    assert!((body[0].height_m - body[0].at[2]).abs() < 1e-12);
+}
+
 /// The bar of `SHOULDER`: radius 8 cm along x, its axis at z = 1.17 m, its top at 1.25 m.
 fn shoulder_bar() -> (TriMesh, f64, f64) {
     let (r, zc) = (0.08, 1.17);
@@ -239,6 +311,9 @@ fn the_garment_command_reports_a_tube_on_a_cylinder() {
     // crossed the other side's triangles, a row off the seam, where the fold brings them within
     // a triangle of each other.)
     assert!(g["self_crossing_edges"].as_u64().unwrap() <= 10, "{g}");
+    // Spots only for what failed: the moving fraction, if anything (it has none).
+    assert_eq!(r["spots"], serde_json::json!([]), "{}", r["spots"]);
+    assert_eq!(r["spots_left_out"], 0);
     assert!(r["body_closed"].as_bool().unwrap());
     assert!(r["self_contact"]["candidates"].is_u64());
     // The fit check, before the drape: the tube's two open ends, 1.2 m round a column they

@@ -75,6 +75,8 @@ fn a_garment_scene_drapes_as_the_garment_command_does() {
         "failed",
         "moving_fraction",
         "thresholds",
+        "fit_check",
+        "spots",
     ] {
         assert_eq!(s[key], g[key], "{key}");
     }
@@ -187,6 +189,63 @@ fn a_garment_scene_in_centimetres_places_the_pattern_by_its_keys() {
         .map(|p| ((p.x - 30.0).powi(2) + p.y.powi(2)).sqrt())
         .fold(f64::INFINITY, f64::min);
     assert!(radius > 18.6, "outside the column: {radius} cm");
+}
+
+#[test]
+fn a_garment_scene_runs_the_fit_check_on_its_objects_where_the_garment_is_placed() {
+    // The tube (120 cm round) and a column 157 cm round: both ends are too short, as the
+    // garment command says of the same files. The scene lifts the column and the tube 50 cm
+    // and turns the tube a quarter: the same rings, the same girths, 50 cm higher.
+    let dir = tube_folder();
+    let d = dir.path();
+    let fat = common::cylinder(0.25, 0.5, 1.5, 48);
+    common::write_y_up_obj(&fat, &d.join("fat.obj"));
+    let scene = d.join("lifted.toml");
+    let text = "[[object]]\nmesh = \"fat.obj\"\nup = \"y\"\ntranslate = [0, 0, 0.5]\n\n[[garment]]\npattern = \"tube_specification.json\"\nspacing = 0.05\ntranslation = [0, 0, 0.5]\nrotation = 90\nsew_max = 0.02\nsettle_max = 0.02\n";
+    std::fs::write(&scene, text).unwrap();
+    let args = ["drape", scene.to_str().unwrap(), "-o"];
+    let o = common::run(&[&args[..], &[d.join("s").to_str().unwrap(), "--json"]].concat());
+    let (stdout, stderr) = common::text(&o);
+    assert!(o.status.success(), "{stderr}");
+    let s: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    let g = run_json(&[
+        "garment",
+        d.join("tube_specification.json").to_str().unwrap(),
+        "--body",
+        d.join("fat.obj").to_str().unwrap(),
+        "-o",
+        d.join("g").to_str().unwrap(),
+        "--spacing",
+        "0.05",
+        "--sew-max",
+        "0.02",
+        "--settle-max",
+        "0.02",
+        "--json",
+    ]);
+    let (fs, fg) = (&s["fit_check"], &g["fit_check"]);
+    assert_eq!(fs["too_short"], 2, "{fs}");
+    assert_eq!(fg["too_short"], 2, "{fg}");
+    // Two warnings on stderr before the run, one per end.
+    assert_eq!(stderr.matches("warning: fit check").count(), 2, "{stderr}");
+    let rings = |f: &serde_json::Value| f["rings"].as_array().unwrap().clone();
+    assert_eq!(rings(fs).len(), 2);
+    let num = |v: &serde_json::Value| v.as_f64().unwrap();
+    for (a, b) in rings(fs).iter().zip(&rings(fg)) {
+        assert_eq!(a["edges"], b["edges"]);
+        assert_eq!(a["fits"], false);
+        for k in 0..2 {
+            let (za, zb) = (num(&a["height_m"][k]), num(&b["height_m"][k]));
+            assert!((za - zb - 0.5).abs() < 1e-9, "{za} {zb}");
+        }
+        // The 48-gon turned a quarter (12 facets) about its axis: the same girth.
+        for k in 0..2 {
+            let (ga, gb) = (num(&a["body_girth_m"][k]), num(&b["body_girth_m"][k]));
+            assert!((ga - gb).abs() < 1e-9, "{ga} {gb}");
+        }
+        let girth = 96.0 * 0.25 * (std::f64::consts::PI / 48.0).sin();
+        assert!((num(&a["body_girth_m"][0]) - girth).abs() < 1e-6, "{a}");
+    }
 }
 
 /// Runs `drape` on the scene `text`, written as `bad.toml` into `dir` beside the tube's files,

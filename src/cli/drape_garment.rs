@@ -4,10 +4,16 @@
 //! as placed are written in the scene's units and frame, with the garment's report.
 
 use super::drape::{object_reports, stage_objects, DrapeArgs, ObjectReport};
-use super::garment::{garment_mesh, outcome, print_outcome, stage_glb, GarmentOutcome};
+use super::garment::{
+    fit_options, garment_mesh, outcome, print_fit_check, print_outcome, stage_glb, warn_too_short,
+    GarmentOutcome,
+};
+use crate::collide::Collider;
 use crate::garment::drape as gd;
+use crate::garment::fit_check::{fit_check, FitCheck};
 use crate::io::{self, WriteOptions};
 use crate::mesh::transform::{Units, Up};
+use crate::mesh::TriMesh;
 use crate::scene::Scene;
 use crate::sim;
 use anyhow::bail;
@@ -32,6 +38,10 @@ pub struct GarmentSceneReport {
     pub spacing: f64,
     /// Per object: what `drape` reports of it.
     pub objects: Vec<ObjectReport>,
+    /// Each closed ring of the pattern against the scene's closed objects where it sits,
+    /// checked before the simulation (`garment::fit_check`; lengths in m, heights in m in the
+    /// scene's frame; `null`: no closed object).
+    pub fit_check: Option<FitCheck>,
     /// The sewn and draped garment, measured and judged.
     #[serde(flatten)]
     pub outcome: GarmentOutcome,
@@ -60,6 +70,11 @@ pub(super) fn run(args: &DrapeArgs, sc: Scene, start: std::time::Instant) -> any
         );
     }
     let bodies = sim::load_objects(&sc)?;
+    let settings = &spec.settings;
+    let fit = scene_fit_check(&spec.pattern, &bodies, settings)?;
+    if let Some(f) = &fit {
+        warn_too_short(f);
+    }
     super::remove_stale_temps(&[out]);
     let progress = |t: f64| {
         if super::interactive() {
@@ -68,7 +83,6 @@ pub(super) fn run(args: &DrapeArgs, sc: Scene, start: std::time::Instant) -> any
     };
     let signals = super::interrupt::install()?;
     let cancel = Some(signals.cancel());
-    let settings = &spec.settings;
     let g = match gd::sew_and_drape(&spec.pattern, bodies, settings, &progress, cancel) {
         Err(gd::GarmentError::Sim(sim::SimError::Interrupted(_))) => {
             let what = "during the garment run: a garment keeps no checkpoint; nothing was written";
@@ -85,8 +99,8 @@ pub(super) fn run(args: &DrapeArgs, sc: Scene, start: std::time::Instant) -> any
     if super::interactive() {
         eprintln!();
     }
-    let (outcome, world) = outcome(g, &spec.pattern);
     let to_units = Units::factor(Units::M, sc.units);
+    let (outcome, world) = outcome(g, &spec.pattern, Up::Z, to_units);
     let inputs: Vec<&Path> = [sc.path.as_path(), spec.path.as_path()]
         .into_iter()
         .chain(sc.objects.iter().map(|o| o.mesh.as_path()))
@@ -160,6 +174,7 @@ pub(super) fn run(args: &DrapeArgs, sc: Scene, start: std::time::Instant) -> any
         fabric: spec.fabric_name.clone(),
         spacing: settings.assemble.spacing * to_units,
         objects: object_reports(&world, to_units, object_files),
+        fit_check: fit,
         outcome,
         files,
         command_seconds: start.elapsed().as_secs_f64(),
@@ -186,5 +201,46 @@ fn print_summary(r: &GarmentSceneReport) {
         r.fabric,
         objects.join(", ")
     );
+    if let Some(f) = &r.fit_check {
+        print_fit_check(f);
+    }
     print_outcome(&r.outcome, r.command_seconds);
+}
+
+/// The fit check of a scene's garment on the scene's closed objects (`None`: there are none):
+/// the objects are brought into the pattern's frame (the garment's placement undone, a turn
+/// about z and a shift) and judged as `drapekit garment` judges a body; the heights are given
+/// back in the scene's frame.
+fn scene_fit_check(
+    pattern: &crate::garment::Pattern,
+    bodies: &[Collider],
+    settings: &gd::GarmentSettings,
+) -> anyhow::Result<Option<FitCheck>> {
+    let placement = &settings.assemble.placement;
+    let (mut positions, mut triangles) = (Vec::new(), Vec::new());
+    for c in bodies.iter().filter(|c| c.closed) {
+        let first = positions.len() as u32;
+        positions.extend(c.mesh.positions.iter().map(|p| placement.unapply(*p)));
+        let shifted = c.mesh.faces.iter().map(|t| t.map(|v| v + first));
+        triangles.extend(shifted);
+    }
+    if triangles.is_empty() {
+        return Ok(None);
+    }
+    let mut fit = fit_check(
+        pattern,
+        &TriMesh::new(positions, triangles),
+        &fit_options(settings),
+    )?;
+    let dz = placement.translation.z;
+    for r in &mut fit.rings {
+        r.height_m = r.height_m.map(|z| z + dz);
+        for z in [&mut r.narrow_enough_above_m, &mut r.narrow_enough_below_m]
+            .into_iter()
+            .flatten()
+        {
+            *z += dz;
+        }
+    }
+    Ok(Some(fit))
 }

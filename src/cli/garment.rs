@@ -7,6 +7,7 @@ use crate::garment::drape::{self as gd, GarmentSettings, StageReport};
 use crate::garment::fit_check::{fit_check, FitCheck, FitCheckOptions, Ring};
 use crate::garment::measure::{self, Measures, Thresholds};
 use crate::garment::spec::Pattern;
+use crate::garment::spots::{spots, Spot, SpotKind};
 use crate::io::{self, ReadOptions};
 use crate::mesh::prepare::{prepare, PrepareOptions};
 use crate::mesh::transform::{change_up, change_up_point, Units, Up};
@@ -141,6 +142,11 @@ pub struct GarmentOutcome {
     pub panels: Vec<Measures>,
     /// The stitches whose seams are not closed (gap above the verdict's limit), widest first.
     pub open_seams: Vec<measure::OpenSeam>,
+    /// Where each failed measure fails (`garment::spots`): per kind the largest spots first,
+    /// `at` in the garment output's frame and units.
+    pub spots: Vec<Spot>,
+    /// Spots left out of `spots` (more than `garment::spots::SPOTS_PER_KIND` of a kind).
+    pub spots_left_out: usize,
     /// The stitches that gather a longer edge into a shorter one (`garment::gathers`).
     pub gathers: Vec<crate::garment::gathers::Gather>,
     /// The limits of the verdict.
@@ -151,15 +157,27 @@ pub struct GarmentOutcome {
     pub failed: Vec<String>,
 }
 
-/// `g`, sewn from `pattern`, measured and judged for the report.
-pub(super) fn outcome(g: gd::Garment, pattern: &Pattern) -> (GarmentOutcome, sim::World) {
+/// `g`, sewn from `pattern`, measured and judged for the report; positions in the frame of
+/// the garment's output mesh (`up` up, lengths times `to_units`, as [`garment_mesh`]).
+pub(super) fn outcome(
+    g: gd::Garment,
+    pattern: &Pattern,
+    up: Up,
+    to_units: f64,
+) -> (GarmentOutcome, sim::World) {
     let Judged {
         moving,
         panels,
         whole,
         thresholds,
         failed,
+        mut spots,
+        spots_left_out,
     } = judge(&g);
+    for s in &mut spots {
+        let p = change_up_point(s.at.into(), Up::Z, up) * to_units;
+        s.at = p.into();
+    }
     let o = GarmentOutcome {
         particles: g.world.model.len(),
         triangles: g.world.model.triangles.len(),
@@ -178,6 +196,8 @@ pub(super) fn outcome(g: gd::Garment, pattern: &Pattern) -> (GarmentOutcome, sim
         thresholds,
         verdict: if failed.is_empty() { "pass" } else { "fail" }.into(),
         failed,
+        spots,
+        spots_left_out,
         sew: g.sew,
         drape: g.drape,
     };
@@ -418,6 +438,10 @@ pub(super) struct Judged {
     pub thresholds: Thresholds,
     /// What failed (empty: pass).
     pub failed: Vec<String>,
+    /// Where (the simulation's frame).
+    pub spots: Vec<Spot>,
+    /// Spots beyond `SPOTS_PER_KIND` of a kind.
+    pub spots_left_out: usize,
 }
 
 /// Measures `g` and judges it by the default thresholds (inside: in any closed body).
@@ -428,16 +452,20 @@ pub(super) fn judge(g: &gd::Garment) -> Judged {
     let inside: Vec<bool> = (g.world.state.x.iter())
         .map(|p| closed.iter().any(|c| sim::inside(c, p)))
         .collect();
-    let mut panels = measure::measures(&g.world, &g.seams, &inside);
+    let crossings = measure::crossings(&g.world, &g.seams);
+    let mut panels = measure::measures_of(&g.world, &g.seams, &inside, &crossings);
     let whole = panels.pop().expect("the whole garment");
     let thresholds = Thresholds::default();
     let failed = measure::verdict(&whole, moving, &thresholds);
+    let (spots, spots_left_out) = spots(&g.world, &inside, &crossings, &thresholds);
     Judged {
         moving,
         panels,
         whole,
         thresholds,
         failed,
+        spots,
+        spots_left_out,
     }
 }
 
@@ -456,14 +484,8 @@ pub fn run(args: GarmentArgs) -> anyhow::Result<()> {
             args.output.display()
         );
     }
-    let clearance = settings.assemble.fabric.thickness
-        + settings
-            .body_clearance
-            .unwrap_or(gd::AUTO_CLEARANCE * settings.assemble.spacing);
-    let fit = fit_check(&pattern, &body, &FitCheckOptions::with_clearance(clearance))?;
-    for r in fit.rings.iter().filter(|r| r.fits == Some(false)) {
-        eprintln!("warning: {}", too_short(r));
-    }
+    let fit = fit_check(&pattern, &body, &fit_options(&settings))?;
+    warn_too_short(&fit);
     let progress = |t: f64| {
         if super::interactive() {
             eprint!("\rsewing: {t:.2} s simulated");
@@ -488,7 +510,7 @@ pub fn run(args: GarmentArgs) -> anyhow::Result<()> {
     if super::interactive() {
         eprintln!();
     }
-    let (outcome, world) = outcome(g, &pattern);
+    let (outcome, world) = outcome(g, &pattern, Up::Y, 1.0);
     let c = &world.colliders[0];
     std::fs::create_dir_all(&args.output)
         .with_context(|| format!("cannot create {}", args.output.display()))?;
@@ -568,6 +590,36 @@ pub fn run(args: GarmentArgs) -> anyhow::Result<()> {
 }
 
 /// One line on a ring too short for the body where it sits.
+/// The fit check's options for a garment run's settings: the cloth keeps the fabric's
+/// thickness and the body clearance off the body.
+pub(super) fn fit_options(settings: &GarmentSettings) -> FitCheckOptions {
+    let clearance = settings.assemble.fabric.thickness
+        + settings
+            .body_clearance
+            .unwrap_or(gd::AUTO_CLEARANCE * settings.assemble.spacing);
+    FitCheckOptions::with_clearance(clearance)
+}
+
+/// A warning on stderr, at once, for each ring too short for the body.
+pub(super) fn warn_too_short(fit: &FitCheck) {
+    for r in fit.rings.iter().filter(|r| r.fits == Some(false)) {
+        eprintln!("warning: {}", too_short(r));
+    }
+}
+
+/// The summary's lines of the fit check.
+pub(super) fn print_fit_check(f: &FitCheck) {
+    println!(
+        "  fit check (before the drape): {} rings, {} judged, {} too short for the body",
+        f.rings.len(),
+        f.rings.iter().filter(|r| r.judged).count(),
+        f.too_short
+    );
+    for ring in f.rings.iter().filter(|r| r.fits == Some(false)) {
+        println!("    {}", too_short(ring));
+    }
+}
+
 fn too_short(r: &Ring) -> String {
     let cm = |m: f64| format!("{:.1} cm", m * 100.0);
     let at = |z: Option<f64>| z.map_or("nowhere".to_string(), |z| format!("at {z:.3} m"));
@@ -602,16 +654,7 @@ fn print_summary(r: &GarmentReport) {
     for a in &r.assumed {
         println!("  assumed: {a}");
     }
-    let f = &r.fit_check;
-    println!(
-        "  fit check (before the drape): {} rings, {} judged, {} too short for the body",
-        f.rings.len(),
-        f.rings.iter().filter(|r| r.judged).count(),
-        f.too_short
-    );
-    for ring in f.rings.iter().filter(|r| r.fits == Some(false)) {
-        println!("    {}", too_short(ring));
-    }
+    print_fit_check(&r.fit_check);
     print_outcome(&r.outcome, r.wall_seconds);
 }
 
@@ -656,6 +699,9 @@ pub(super) fn print_outcome(r: &GarmentOutcome, wall_seconds: f64) {
     for f in &r.failed {
         println!("    failed: {f}");
     }
+    for s in largest_spots(&r.spots) {
+        println!("    where: {}", spot_line(s));
+    }
     for o in r.open_seams.iter().take(5) {
         println!(
             "    open seam: stitch {} ({} to {}), gap {:.1} mm",
@@ -675,4 +721,30 @@ pub(super) fn print_outcome(r: &GarmentOutcome, wall_seconds: f64) {
             g.lengths_mm[1]
         );
     }
+}
+
+/// The largest spot of each kind, in the report's order.
+fn largest_spots(spots: &[Spot]) -> Vec<&Spot> {
+    let mut out: Vec<&Spot> = Vec::new();
+    for s in spots {
+        if out.iter().all(|o| o.kind != s.kind) {
+            out.push(s);
+        }
+    }
+    out
+}
+
+/// One summary line for a spot: `9 springs strained up to 9.4% on right_ftorso, 1.31 m up`.
+fn spot_line(s: &Spot) -> String {
+    let what = match s.kind {
+        SpotKind::BodyCrossing => format!("{} edges through the body", s.count),
+        SpotKind::SelfCrossing => format!("{} edges through the cloth", s.count),
+        SpotKind::Inside => format!("{} particles inside the body", s.count),
+        SpotKind::Strain => format!(
+            "{} springs strained up to {:.1}%",
+            s.count,
+            s.worst.unwrap_or(0.0) * 100.0
+        ),
+    };
+    format!("{what} on {}, {:.2} m up", s.panel, s.height_m)
 }

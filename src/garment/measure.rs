@@ -62,6 +62,47 @@ pub struct Measures {
 
 /// Per panel, then the whole garment (last). `inside[i]`: particle `i` is inside the body.
 pub fn measures(world: &World, seams: &[SeamPair], inside: &[bool]) -> Vec<Measures> {
+    measures_of(world, seams, inside, &crossings(world, seams))
+}
+
+/// The cloth edges that cross something: the body (any collider), then the cloth (each edge
+/// once, seams welded). An edge's two ends are in one panel; `[lower, higher]` particle.
+#[derive(Debug, Clone, Default)]
+pub struct Crossings {
+    /// Edges through the body.
+    pub body: Vec<[u32; 2]>,
+    /// Edges through a cloth triangle that shares no vertex with them.
+    pub cloth: Vec<[u32; 2]>,
+}
+
+/// Finds the crossing edges of the garment in `world`.
+pub fn crossings(world: &World, seams: &[SeamPair]) -> Crossings {
+    let (m, x) = (&world.model, &world.state.x);
+    let pairs: Vec<[u32; 2]> = seams.iter().map(|s| [s.a, s.b]).collect();
+    let mut hash = ClothHash::new(m.len(), &m.triangles, &pairs);
+    let cell = AUTO_CELL * mean_edge_length(x, hash.edges());
+    hash.rebuild(x, &m.triangles, cell.max(1e-6), 0.0);
+    let mut out = Crossings::default();
+    for c in &world.colliders {
+        let flags = body_crossing_flags(c, x, hash.edges());
+        let crossing = hash.edges().iter().zip(flags).filter(|(_, f)| *f);
+        out.body.extend(crossing.map(|(e, _)| *e));
+    }
+    for (e, _) in self_crossings(x, &m.triangles, &hash) {
+        if out.cloth.last() != Some(&e) {
+            out.cloth.push(e);
+        }
+    }
+    out
+}
+
+/// [`measures`] with the crossing edges already found.
+pub fn measures_of(
+    world: &World,
+    seams: &[SeamPair],
+    inside: &[bool],
+    crossings: &Crossings,
+) -> Vec<Measures> {
     let m = &world.model;
     let x = &world.state.x;
     let mut out: Vec<Measures> = m
@@ -78,12 +119,7 @@ pub fn measures(world: &World, seams: &[SeamPair], inside: &[bool]) -> Vec<Measu
         particles: m.len(),
         ..Measures::default()
     });
-    let panel_of = |i: u32| {
-        m.pieces
-            .iter()
-            .position(|p| (i as usize) >= p.first && (i as usize) < p.first + p.count)
-            .expect("every particle is in a piece")
-    };
+    let panel_of = |i: u32| panel_of(world, i);
     let whole = out.len() - 1;
     let mut gap_sum = vec![0.0; out.len()];
     let mut gap_count = vec![0usize; out.len()];
@@ -112,41 +148,22 @@ pub fn measures(world: &World, seams: &[SeamPair], inside: &[bool]) -> Vec<Measu
         out[k].max_strain = out[k].max_strain.max(e);
         out[whole].max_strain = out[whole].max_strain.max(e);
     }
-    let (body, cloth) = crossing_edges(world, seams);
-    for (e, (b, c)) in body.iter().zip(&cloth).enumerate() {
-        let k = panel_of(e as u32);
-        for k in [k, whole] {
-            out[k].body_crossing_edges += *b as usize;
-            out[k].self_crossing_edges += *c as usize;
-        }
+    for e in &crossings.body {
+        out[panel_of(e[0])].body_crossing_edges += 1;
+        out[whole].body_crossing_edges += 1;
+    }
+    for e in &crossings.cloth {
+        out[panel_of(e[0])].self_crossing_edges += 1;
+        out[whole].self_crossing_edges += 1;
     }
     out
 }
 
-/// Per particle `i`, how many of the cloth edges starting at `i` (their lower end, seams welded)
-/// cross the body, then the cloth. An edge's two ends are in one panel.
-fn crossing_edges(world: &World, seams: &[SeamPair]) -> (Vec<u32>, Vec<u32>) {
-    let (m, x) = (&world.model, &world.state.x);
-    let pairs: Vec<[u32; 2]> = seams.iter().map(|s| [s.a, s.b]).collect();
-    let mut hash = ClothHash::new(m.len(), &m.triangles, &pairs);
-    let cell = AUTO_CELL * mean_edge_length(x, hash.edges());
-    hash.rebuild(x, &m.triangles, cell.max(1e-6), 0.0);
-    let mut body = vec![0u32; m.len()];
-    for c in &world.colliders {
-        let flags = body_crossing_flags(c, x, hash.edges());
-        for (e, _) in hash.edges().iter().zip(flags).filter(|(_, f)| *f) {
-            body[e[0] as usize] += 1;
-        }
-    }
-    let mut cloth = vec![0u32; m.len()];
-    let mut last = None;
-    for (e, _) in self_crossings(x, &m.triangles, &hash) {
-        if last != Some(e) {
-            cloth[e[0] as usize] += 1;
-            last = Some(e);
-        }
-    }
-    (body, cloth)
+/// The panel (piece) of particle `i`.
+pub(crate) fn panel_of(world: &World, i: u32) -> usize {
+    (world.model.pieces.iter())
+        .position(|p| (i as usize) >= p.first && (i as usize) < p.first + p.count)
+        .expect("every particle is in a piece")
 }
 
 /// The verdict: every failed limit, named (empty: passes).

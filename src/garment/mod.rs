@@ -6,7 +6,8 @@
 //! reports every problem it finds; [`curve`] evaluates, measures and samples edge curves;
 //! [`sample`] samples the outlines with the two edges of every stitch paired point to point;
 //! [`gathers`] lists the stitches that join edges of different lengths; [`fit_check`] compares
-//! each closed ring of the sewn garment with the body's girth where it sits, before a drape.
+//! each closed ring of the sewn garment with the body's girth where it sits, before a drape;
+//! [`measure`] measures and judges a drape, and [`spots`] says where it fails.
 
 pub mod assemble;
 pub mod curve;
@@ -18,6 +19,7 @@ pub mod lift;
 pub mod measure;
 pub mod sample;
 pub mod spec;
+pub mod spots;
 
 pub use curve::Curve;
 pub use spec::{parse, read, Edge, EdgeRef, Panel, Pattern, Problem, SpecError, Stitch};
