@@ -39,6 +39,7 @@ use crate::cloth::model::ClothModel;
 use crate::cloth::pattern;
 use crate::cloth::stability;
 use crate::cloth::state::{ClothState, Contact};
+use crate::collide::body_points::{self, BodyPoints, Pushed};
 use crate::collide::cloth::{resolve_self, ClothHash, SelfCloth, SelfCollisionOptions, SelfStats};
 use crate::collide::contact;
 use crate::collide::Collider;
@@ -127,17 +128,71 @@ pub struct SelfContact {
     /// Totals over the steps run so far (`seconds` the wall time; `remaining` is the last
     /// step's).
     pub totals: SelfStats,
+    /// Per object, its vertices' normals and neighbours for the tips pass
+    /// (`collide::body_points`), built when the cloth first reaches it.
+    pub tips: Vec<Option<BodyPoints>>,
+    /// Whether the tips pass runs (default true; off only to measure what it does).
+    pub tips_on: bool,
+    /// Tips of the objects found through the cloth, and corrected, over the steps run so far.
+    pub tips_pushed: Pushed,
+    /// The cloth's mean edge length at rest, m.
+    pub edge: f64,
 }
 
 impl SelfContact {
     /// Self-contact for `model`, the particle pairs of `seams` welded (sewn sides do not push
     /// each other apart).
     pub fn new(model: &ClothModel, seams: &[[u32; 2]], options: SelfCollisionOptions) -> Self {
+        let hash = ClothHash::new(model.len(), &model.triangles, seams);
+        let rest: Vec<Point3> = (model.rest.iter())
+            .map(|q| Point3::new(q.x, q.y, 0.0))
+            .collect();
+        let edge = crate::collide::cloth::mean_edge_length(&rest, hash.edges());
         SelfContact {
             options,
-            hash: ClothHash::new(model.len(), &model.triangles, seams),
+            hash,
             totals: SelfStats::default(),
+            tips: Vec::new(),
+            tips_on: true,
+            tips_pushed: Pushed::default(),
+            edge,
         }
+    }
+
+    /// The tips pass (`collide::body_points`): the vertices of the reachable objects that poke
+    /// through the cloth at `x` push it past them, velocities `v` with it.
+    pub fn push_tips(
+        &mut self,
+        model: &ClothModel,
+        colliders: &[Collider],
+        reach: &[bool],
+        x: &mut [Point3],
+        v: &mut [Vec3],
+    ) {
+        if !self.tips_on || !reach.iter().any(|&r| r) || model.triangles.is_empty() {
+            return;
+        }
+        let start = Instant::now();
+        self.tips.resize_with(colliders.len(), || None);
+        let h_max = par::max(model.len(), |i| model.thickness[i]);
+        let c_max = colliders.iter().map(|c| c.clearance).fold(0.0, f64::max);
+        let grow = body_points::reach(h_max + c_max, self.edge);
+        let cell = crate::collide::cloth::AUTO_CELL * self.edge;
+        self.hash.rebuild(x, &model.triangles, cell.max(grow), grow);
+        for (k, c) in colliders.iter().enumerate().filter(|(k, _)| reach[*k]) {
+            let points = self.tips[k].get_or_insert_with(|| BodyPoints::new(c));
+            let distance: Vec<f64> = model.thickness.iter().map(|t| t + c.clearance).collect();
+            let cloth = body_points::Cloth {
+                triangles: &model.triangles,
+                distance: &distance,
+                inv_mass: &model.inv_mass,
+                edge: self.edge,
+            };
+            let done = body_points::push_cloth(c, points, &cloth, &self.hash, x, v);
+            self.tips_pushed.pairs += done.pairs;
+            self.tips_pushed.corrected += done.corrected;
+        }
+        self.totals.seconds += start.elapsed().as_secs_f64();
     }
 
     /// The self-contact phase of a step from `x0` to `x1` (velocities `v1`), corrected in place.
@@ -668,6 +723,10 @@ pub fn run(
                 &mut v_new,
                 &mut state.contact,
             );
+            // Then the objects' tips through the cloth (with cloth against cloth: garments).
+            if let Some(sc) = self_contact {
+                sc.push_tips(model, colliders, &reach, &mut x_new, &mut v_new);
+            }
             if let Some(e) = before {
                 lp.watch
                     .add_work(watch::mechanical(model, &x_new, &v_new, &state.x) - e);
