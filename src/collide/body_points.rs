@@ -39,7 +39,7 @@
 
 use super::cloth::{segment_crosses_triangle, ClothHash};
 use super::Collider;
-use crate::math::{Point3, Vec3};
+use crate::math::{Aabb, Point3, Vec3};
 use crate::par;
 use rayon::prelude::*;
 
@@ -166,10 +166,18 @@ pub fn push_cloth(
 ) -> Pushed {
     let body = &collider.mesh.positions;
     let xs: &[Point3] = x;
+    // Only the body's vertices within the hash's reach of the cloth can be in a box.
+    let Some(near) = Aabb::of_points(xs) else {
+        return Pushed::default();
+    };
+    let grow = reach(
+        cloth.distance.iter().copied().fold(0.0, f64::max),
+        cloth.edge,
+    );
     let search = |r: std::ops::Range<usize>| {
         let mut out = Vec::new();
         for i in r {
-            if points.normals[i] == Vec3::zeros() {
+            if points.normals[i] == Vec3::zeros() || !near.contains(&body[i], grow) {
                 continue;
             }
             hash.for_point(&body[i], |t| {
