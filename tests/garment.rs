@@ -653,6 +653,58 @@ fn the_fit_check_finds_the_rings_and_judges_them_on_a_cylinder() {
 }
 
 #[test]
+fn the_fit_check_judges_a_tilted_ring_in_its_own_plane() {
+    // The tube and the cylinder of the test above, both tilted 50 degrees about x (over
+    // MAX_TILT_DEG: a horizontal slice would cut the cylinder in an ellipse). The rings are
+    // judged across the cylinder's axis: the same 64-gon girth as upright, and the same verdict.
+    use drapekit::garment::fit_check::{fit_check, FitCheckOptions, MAX_TILT_DEG};
+    let t = 50.0f64;
+    let (s, c) = t.to_radians().sin_cos();
+    // The pattern's y-up frame: (x, y, z) -> (x, y c - z s, y s + z c).
+    let q = |p: [f64; 3]| [p[0], p[1] * c - p[2] * s, p[1] * s + p[2] * c];
+    let (f, b) = (q([0.0, 80.0, 30.0]), q([0.0, 80.0, -30.0]));
+    let text = tube()
+        .replace(
+            r#""translation": [0, 80, 30], "rotation": [0, 0, 0]"#,
+            &format!(
+                r#""translation": [{}, {}, {}], "rotation": [{t}, 0, 0]"#,
+                f[0], f[1], f[2]
+            ),
+        )
+        .replace(
+            r#""translation": [0, 80, -30], "rotation": [0, 180, 0]"#,
+            &format!(
+                r#""translation": [{}, {}, {}], "rotation": [{}, 180, 0]"#,
+                b[0], b[1], b[2], -t
+            ),
+        );
+    assert_ne!(text, tube(), "the placements were replaced");
+    let pattern = parse(&text, Path::new("tilted.json")).unwrap();
+    let opts = FitCheckOptions::with_clearance(0.004);
+    for (r, fits) in [(0.18, true), (0.2, false)] {
+        // The cylinder tilted alike: drapekit's z-up (x, y, z) is the pattern's (x, z, -y).
+        let mut body = common::cylinder(r, 0.5, 1.5, 64);
+        for p in &mut body.positions {
+            let [x, y, z] = q([p.x, p.z, -p.y]);
+            *p = Point3::new(x, -z, y);
+        }
+        let check = fit_check(&pattern, &body, &opts).unwrap();
+        assert_eq!(check.rings.len(), 2, "{check:?}");
+        let g = ngon(r, 64);
+        for ring in &check.rings {
+            assert!((ring.tilt_deg - t).abs() < 1e-6, "{ring:?}");
+            assert!(ring.tilt_deg > MAX_TILT_DEG);
+            assert!(ring.judged, "{ring:?}");
+            let [lo, hi] = ring.body_girth_m.unwrap();
+            assert!((lo - g).abs() < 1e-9 && (hi - g).abs() < 1e-9, "{ring:?}");
+            assert_eq!(ring.fits, Some(fits), "r = {r}: {ring:?}");
+            assert!(ring.note.as_deref().unwrap().contains("own plane"));
+        }
+        assert_eq!(check.too_short, if fits { 0 } else { 2 });
+    }
+}
+
+#[test]
 fn the_fit_check_measures_a_seam_ring_with_its_dart_closed_on_a_cone() {
     use drapekit::garment::fit_check::{fit_check, FitCheckOptions, RingKind, STEP};
     let pattern = parse(WAIST, Path::new("waist.json")).unwrap();

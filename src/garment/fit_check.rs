@@ -19,9 +19,17 @@
 //!
 //! **Where a ring sits.** The panels' placement puts the ring's samples (each edge at
 //! [`RING_SAMPLE`]) in 3D; the ring sits over their height span `[z_lo, z_hi]` (both sides of a
-//! seam). Its tilt is the angle between its Newell normal and the vertical; a ring tilted more
-//! than [`MAX_TILT_DEG`] (an armhole, a cuff on a lowered arm, a hood's face) is listed but not
-//! judged, since a horizontal slice does not measure what it goes round.
+//! seam). Its tilt is the angle between its Newell normal and the vertical. A ring tilted more
+//! than [`MAX_TILT_DEG`] (a cuff on a lowered arm) is judged **in its own plane**:
+//! the body and the ring are turned so that the ring's normal is vertical, and the rule below
+//! is applied there (the body's section across the arm, not a horizontal slice through it);
+//! the nearest heights where the body is narrow enough are then not given (they would be
+//! along the ring's axis). A ring tilted more than [`MAX_JUDGED_TILT_DEG`] is listed, not
+//! judged: an armhole as laid out (its panels flat in front of and behind the body, before
+//! sewing brings them round the shoulder) has a plane that cuts the shoulder obliquely, and
+//! the section there is no armhole's measure (the hoody's 46 cm armholes, 64 degrees, would
+//! need 58 cm of that section, the dress's 53.4 cm ones 58 cm, at 65 degrees); a hood's face has a plane
+//! along the head, which the opening does not go round.
 //!
 //! **The body's girth there.** The body is sliced horizontally every [`STEP`] over the span
 //! (and at its ends). Of each slice's loops, those whose area centroid lies inside the ring's
@@ -42,10 +50,11 @@
 
 use super::spec::{EdgeRef, Pattern};
 use crate::geom::contains;
-use crate::math::{newell_normal, Point2, Point3};
+use crate::math::{newell_normal, Point2, Point3, Vec3};
 use crate::mesh::slice::{girth, slice};
 use crate::mesh::transform::{change_up_point, Up};
 use crate::mesh::TriMesh;
+use nalgebra::Rotation3;
 use serde::Serialize;
 use std::collections::HashMap;
 
@@ -53,8 +62,13 @@ use std::collections::HashMap;
 /// (`measure::Thresholds::max_strain`).
 pub const STRAIN_ALLOWANCE: f64 = 0.05;
 
-/// Rings tilted more than this from horizontal are not judged, degrees.
+/// Rings tilted more than this from horizontal are judged in their own plane, degrees.
 pub const MAX_TILT_DEG: f64 = 30.0;
+
+/// Rings tilted more than this from horizontal are not judged, degrees: an armhole (64 and 65
+/// degrees in the real patterns) as laid out, its panels flat in front of and behind the body,
+/// has a plane that cuts the shoulder obliquely, and a hood's face (88) one along the head.
+pub const MAX_JUDGED_TILT_DEG: f64 = 60.0;
 
 /// Height between the body's slices, m.
 pub const STEP: f64 = 0.005;
@@ -127,7 +141,7 @@ pub struct Ring {
     pub tilt_deg: f64,
     /// Whether it was judged (see `note` when not).
     pub judged: bool,
-    /// Why it was not judged.
+    /// Why it was not judged, or how a tilted ring was.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub note: Option<String>,
     /// The body's girth where it sits, m: the narrowest and the widest over its span.
@@ -138,7 +152,8 @@ pub struct Ring {
     pub available_m: f64,
     /// Whether it goes round (`null`: not judged).
     pub fits: Option<bool>,
-    /// When it does not: the nearest height above its span where the body is narrow enough, m.
+    /// When it does not: the nearest height above its span where the body is narrow enough, m
+    /// (not given for a ring judged in its own plane).
     pub narrow_enough_above_m: Option<f64>,
     /// ... and below it.
     pub narrow_enough_below_m: Option<f64>,
@@ -451,14 +466,37 @@ pub fn fit_check(
             narrow_enough_above_m: None,
             narrow_enough_below_m: None,
         };
-        if tilt > MAX_TILT_DEG {
+        if tilt > MAX_JUDGED_TILT_DEG {
             r.note = Some(format!(
-                "tilted {tilt:.0} degrees from horizontal (over {MAX_TILT_DEG}): a horizontal slice \
-                 does not measure what it goes round"
+                "tilted {tilt:.0} degrees from horizontal (over {MAX_JUDGED_TILT_DEG}): its plane \
+                 does not cut what it goes round"
             ));
             out.push(r);
             continue;
         }
+        // A tilted ring: the body and the ring turned so that its normal is vertical.
+        let turned = (tilt > MAX_TILT_DEG).then(|| {
+            let up = if n.z < 0.0 { -n } else { n };
+            let turn =
+                Rotation3::rotation_between(&up, &Vec3::z()).unwrap_or_else(Rotation3::identity);
+            r.note = Some(format!(
+                "tilted {tilt:.0} degrees from horizontal: judged in its own plane"
+            ));
+            let positions = body.positions.iter().map(|p| turn * p).collect();
+            (turn, TriMesh::new(positions, body.faces.clone()))
+        });
+        let (body, outline, lo, hi) = match &turned {
+            Some((turn, b)) => {
+                let q: Vec<Point3> = poly.iter().map(|p| turn * p).collect();
+                let (lo, hi) = q
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), p| {
+                        (l.min(p.z), h.max(p.z))
+                    });
+                (b, q.iter().map(|p| Point2::new(p.x, p.y)).collect(), lo, hi)
+            }
+            None => (body, outline, lo, hi),
+        };
         let steps = ((hi - lo) / opts.step).ceil().max(0.0) as usize;
         let girths: Vec<f64> = (0..=steps)
             .map(|i| (lo + i as f64 * opts.step).min(hi))
@@ -477,7 +515,7 @@ pub fn fit_check(
         r.body_girth_m = Some([g_min, g_max]);
         r.needed_m = Some(needed);
         r.fits = Some(fits);
-        if !fits {
+        if !fits && turned.is_none() {
             let narrow =
                 |z: f64| girth_inside(body, z, &outline).is_some_and(|g| g + extra <= available);
             let up = ((top - hi) / opts.step).floor().max(0.0) as usize;
