@@ -372,6 +372,8 @@ fn the_garment_command_reports_a_tube_on_a_cylinder() {
     assert_eq!(r["spots_left_out"], 0);
     assert!(r["body_closed"].as_bool().unwrap());
     assert!(r["self_contact"]["candidates"].is_u64());
+    // The tips pass ran (a smooth column pokes through nothing).
+    assert_eq!(r["tips"]["corrected"], 0, "{}", r["tips"]);
     // The fit check, before the drape: the tube's two open ends, 1.2 m round a column they
     // fit, and no warning.
     let fit = &r["fit_check"];

@@ -127,8 +127,12 @@ pub struct GarmentOutcome {
     pub triangles: usize,
     /// Seam springs.
     pub seam_springs: usize,
-    /// Cloth-against-cloth contact over both stages (`null`: off).
+    /// Cloth-against-cloth contact over both stages (`null`: off; its `seconds` include the
+    /// tips pass).
     pub self_contact: Option<SelfStats>,
+    /// The body's tips found through the cloth, and corrected, over both stages
+    /// (`collide::body_points`; `null`: off, with cloth against cloth).
+    pub tips: Option<crate::collide::body_points::Pushed>,
     /// Stage 1.
     pub sew: StageReport,
     /// Stage 2.
@@ -183,6 +187,7 @@ pub(super) fn outcome(
         triangles: g.world.model.triangles.len(),
         seam_springs: g.seams.len(),
         self_contact: g.world.self_contact.as_ref().map(|s| s.totals),
+        tips: (g.world.self_contact.as_ref()).map(|s| s.tips_pushed),
         moving_fraction: moving,
         garment: whole,
         panels,

@@ -140,7 +140,7 @@ pub struct Cloth<'a> {
 }
 
 /// What a pass did.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
 pub struct Pushed {
     /// Tips found through a triangle.
     pub pairs: usize,
