@@ -127,12 +127,17 @@ impl BodyPoints {
     }
 }
 
-/// The cloth of a pass: triangles, per-particle contact distance and inverse mass.
+/// The cloth of a pass: triangles, per-particle thickness and inverse mass, the body's
+/// clearance.
 pub struct Cloth<'a> {
     /// Triangles.
     pub triangles: &'a [[u32; 3]],
-    /// Per particle, the distance kept from the body, m.
-    pub distance: &'a [f64],
+    /// Per particle, its thickness, m.
+    pub thickness: &'a [f64],
+    /// The largest thickness, m.
+    pub thickness_max: f64,
+    /// The body's clearance, m (kept on top of the thickness).
+    pub clearance: f64,
     /// Per particle, 1 / mass (0: pinned).
     pub inv_mass: &'a [f64],
     /// The cloth's mean edge length, m.
@@ -170,10 +175,7 @@ pub fn push_cloth(
     let Some(near) = Aabb::of_points(xs) else {
         return Pushed::default();
     };
-    let grow = reach(
-        cloth.distance.iter().copied().fold(0.0, f64::max),
-        cloth.edge,
-    );
+    let grow = reach(cloth.thickness_max + cloth.clearance, cloth.edge);
     let search = |r: std::ops::Range<usize>| {
         let mut out = Vec::new();
         for i in r {
@@ -238,7 +240,12 @@ fn through(
     if w.iter().any(|&u| u < -FACE_TOL) {
         return None;
     }
-    let dist = tri.iter().map(|&k| cloth.distance[k as usize]).sum::<f64>() / 3.0;
+    let dist = tri
+        .iter()
+        .map(|&k| cloth.thickness[k as usize])
+        .sum::<f64>()
+        / 3.0
+        + cloth.clearance;
     let d = n.dot(&(p - (a + (b - a) * beta + (c - a) * gamma)));
     if !(d > 0.0 && d <= reach(dist, cloth.edge)) {
         return None;
@@ -323,7 +330,9 @@ mod tests {
         let (dist, inv) = (vec![0.001; 3], vec![1.0; 3]);
         let cloth = Cloth {
             triangles: tris,
-            distance: &dist,
+            thickness: &dist,
+            thickness_max: 0.001,
+            clearance: 0.0,
             inv_mass: &inv,
             edge,
         };
@@ -413,7 +422,9 @@ mod tests {
         let (dist, inv) = (vec![0.001; 3], vec![0.0, 1.0, 1.0]);
         let cloth = Cloth {
             triangles: &tris,
-            distance: &dist,
+            thickness: &dist,
+            thickness_max: 0.001,
+            clearance: 0.0,
             inv_mass: &inv,
             edge: 0.04,
         };

@@ -137,6 +137,8 @@ pub struct SelfContact {
     pub tips_pushed: Pushed,
     /// The cloth's mean edge length at rest, m.
     pub edge: f64,
+    /// The cloth's largest thickness, m.
+    pub thickness_max: f64,
 }
 
 impl SelfContact {
@@ -156,6 +158,7 @@ impl SelfContact {
             tips_on: true,
             tips_pushed: Pushed::default(),
             edge,
+            thickness_max: model.thickness.iter().copied().fold(0.0, f64::max),
         }
     }
 
@@ -174,17 +177,17 @@ impl SelfContact {
         }
         let start = Instant::now();
         self.tips.resize_with(colliders.len(), || None);
-        let h_max = par::max(model.len(), |i| model.thickness[i]);
         let c_max = colliders.iter().map(|c| c.clearance).fold(0.0, f64::max);
-        let grow = body_points::reach(h_max + c_max, self.edge);
+        let grow = body_points::reach(self.thickness_max + c_max, self.edge);
         let cell = crate::collide::cloth::AUTO_CELL * self.edge;
         self.hash.rebuild(x, &model.triangles, cell.max(grow), grow);
         for (k, c) in colliders.iter().enumerate().filter(|(k, _)| reach[*k]) {
             let points = self.tips[k].get_or_insert_with(|| BodyPoints::new(c));
-            let distance: Vec<f64> = model.thickness.iter().map(|t| t + c.clearance).collect();
             let cloth = body_points::Cloth {
                 triangles: &model.triangles,
-                distance: &distance,
+                thickness: &model.thickness,
+                thickness_max: self.thickness_max,
+                clearance: c.clearance,
                 inv_mass: &model.inv_mass,
                 edge: self.edge,
             };
