@@ -392,10 +392,13 @@ fn the_garment_command_reports_a_tube_on_a_cylinder() {
         .map(|p| p["particles"].as_u64().unwrap())
         .sum();
     assert_eq!(total, r["particles"].as_u64().unwrap());
-    assert!(r["assumed"][0]
-        .as_str()
-        .unwrap()
-        .contains("guessed from its height"));
+    let assumed = r["assumed"][0].as_str().unwrap();
+    assert!(assumed.contains("guessed from its height"), "{assumed}");
+    // The column stands under the panels (0.5 to 1.5 m, round the tube's 0.8 to 1.2 m): kept.
+    assert!(
+        assumed.ends_with("y up, in the pattern's frame"),
+        "{assumed}"
+    );
     // The garment as one OBJ with a group per panel, the body as placed, and (`--panels`)
     // each panel alone: together they hold every particle and triangle once.
     assert_eq!(
@@ -1083,4 +1086,63 @@ fn a_circle_skirt_on_a_cone_hangs_symmetric() {
     }
     // The limit for cloth through cloth.
     assert!(whole.self_crossing_edges <= 10, "{whole:?}");
+}
+
+/// A body from elsewhere (here a column standing on the floor, moved 1.5 m along x, 0.9 m down
+/// and 0.4 m along z, as MakeHuman exports stand centred on the origin) is brought under the
+/// panels, the shift said, and the tube sews round it as round the column in place.
+#[test]
+fn a_body_away_from_the_panels_is_moved_under_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let pattern = dir.path().join("tube_specification.json");
+    std::fs::write(&pattern, tube()).unwrap();
+    // drapekit's (x, y, z) is the file's (x, -z, y): the file's shift (1.5, -0.9, 0.4).
+    let mut body = common::cylinder(0.186, 0.0, 1.5, 48);
+    for p in &mut body.positions {
+        *p += Vec3::new(1.5, -0.4, -0.9);
+    }
+    let body_path = dir.path().join("column.obj");
+    common::write_y_up_obj(&body, &body_path);
+    let out = dir.path().join("out");
+    let o = common::run(&[
+        "garment",
+        pattern.to_str().unwrap(),
+        "--body",
+        body_path.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--spacing",
+        "0.02",
+        "--settle-max",
+        "0.1",
+        "--json",
+    ]);
+    let (stdout, stderr) = common::text(&o);
+    assert!(o.status.success(), "{stderr}");
+    let r: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    let assumed = r["assumed"][0].as_str().unwrap();
+    assert!(
+        assumed.contains("moved into the pattern's frame by (-1.5, 0.9, -0.4) m"),
+        "{assumed}"
+    );
+    let g = &r["garment"];
+    assert!(r["sew"]["done"].as_bool().unwrap(), "{}", r["sew"]);
+    assert!(g["seam_gap_max_mm"].as_f64().unwrap() <= 1.0, "{g}");
+    assert_eq!(g["body_crossing_edges"], 0, "{g}");
+    assert_eq!(g["particles_inside"], 0, "{g}");
+    // The body is written as placed: on the floor, centred, 1.5 m tall (y up).
+    let placed = drapekit::io::read_mesh(&out.join("column.obj"), &Default::default())
+        .unwrap()
+        .mesh;
+    let b = placed.bbox().unwrap();
+    let c = b.center();
+    assert!(
+        b.min.y.abs() < 1e-9 && (b.max.y - 1.5).abs() < 1e-9,
+        "{b:?}"
+    );
+    assert!(c.x.abs() < 1e-9 && c.z.abs() < 1e-9, "{b:?}");
+    // The fit check saw the column where the tube is: both ends judged, both fit.
+    let fit = &r["fit_check"];
+    assert!(fit["rings"][0]["judged"].as_bool().unwrap(), "{fit}");
+    assert_eq!(fit["too_short"], 0, "{fit}");
 }

@@ -5,10 +5,12 @@ use crate::cloth::fabric::Fabric;
 use crate::collide::cloth::{SelfCollisionOptions, SelfStats};
 use crate::garment::drape::{self as gd, GarmentSettings, StageReport};
 use crate::garment::fit_check::{fit_check, FitCheck, FitCheckOptions, Ring};
+use crate::garment::frame;
 use crate::garment::measure::{self, Measures, Thresholds};
 use crate::garment::spec::Pattern;
 use crate::garment::spots::{spots, Spot, SpotKind};
 use crate::io::{self, ReadOptions};
+use crate::math::short;
 use crate::mesh::prepare::{prepare, PrepareOptions};
 use crate::mesh::transform::{change_up, change_up_point, Units, Up};
 use crate::mesh::TriMesh;
@@ -209,9 +211,14 @@ pub(super) fn outcome(
     (o, g.world)
 }
 
-/// The body read, prepared, in metres (units from `spec`, or guessed from its height) and
-/// z up. Returns it and what was assumed.
-pub(super) fn read_body(path: &Path, spec: &str) -> anyhow::Result<(TriMesh, String)> {
+/// The body read, prepared, in metres (units from `spec`, or guessed from its height), moved
+/// under `pattern`'s panels when it is elsewhere (`garment::frame`), and z up. Returns it and
+/// what was assumed.
+pub(super) fn read_body(
+    path: &Path,
+    spec: &str,
+    pattern: &Pattern,
+) -> anyhow::Result<(TriMesh, String)> {
     let read = io::read_mesh(path, &ReadOptions::default())?;
     let mut mesh = read.mesh;
     prepare(&mut mesh, &PrepareOptions::default());
@@ -241,12 +248,32 @@ pub(super) fn read_body(path: &Path, spec: &str) -> anyhow::Result<(TriMesh, Str
     for p in &mut mesh.positions {
         *p = crate::math::Point3::from(p.coords * f);
     }
+    let shift = frame::placed_box(pattern)
+        .zip(mesh.bbox())
+        .and_then(|(panels, body)| frame::body_offset(&panels, &body));
+    let frame_note = match shift {
+        None => "in the pattern's frame".to_string(),
+        Some(d) => {
+            // Four significant digits, and no "-0".
+            let round = |v: f64| short(if v == 0.0 { 0.0 } else { v });
+            for p in &mut mesh.positions {
+                *p += d;
+            }
+            format!(
+                "moved into the pattern's frame by ({}, {}, {}) m (feet to y = 0, centred on x \
+                 and z: it was not under the panels)",
+                round(d.x),
+                round(d.y),
+                round(d.z)
+            )
+        }
+    };
     change_up(&mut mesh, Up::Y, Up::Z);
     let note = format!(
-        "the body is in {units:?} ({how}: {:.3} m tall), y up, in the pattern's frame",
+        "the body is in {} ({how}: {:.3} m tall), y up, {frame_note}",
+        format!("{units:?}").to_lowercase(),
         height * f
-    )
-    .to_lowercase();
+    );
     Ok((mesh, note))
 }
 
@@ -482,7 +509,7 @@ pub fn run(args: GarmentArgs) -> anyhow::Result<()> {
     if args.panels {
         check_panel_names(&pattern, &args.pattern)?;
     }
-    let (body, body_note) = read_body(&args.body, &args.body_units)?;
+    let (body, body_note) = read_body(&args.body, &args.body_units, &pattern)?;
     if args.output.is_file() {
         bail!(
             "{} is a file: the output must be a directory",

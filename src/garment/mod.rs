@@ -7,13 +7,15 @@
 //! [`sample`] samples the outlines with the two edges of every stitch paired point to point;
 //! [`gathers`] lists the stitches that join edges of different lengths; [`fit_check`] compares
 //! each closed ring of the sewn garment with the body's girth where it sits, before a drape;
-//! [`measure`] measures and judges a drape, and [`spots`] says where it fails.
+//! [`measure`] measures and judges a drape, and [`spots`] says where it fails; [`frame`] brings
+//! a body from elsewhere under the pattern's panels.
 
 pub mod assemble;
 pub mod curve;
 pub mod drape;
 pub mod facing;
 pub mod fit_check;
+pub mod frame;
 pub mod gathers;
 pub mod lift;
 pub mod measure;

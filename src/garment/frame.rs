@@ -1,0 +1,52 @@
+//! Bringing a body into a pattern's frame. GarmentCode places its panels around a body standing
+//! on the floor (`y = 0`, y up), centred on `x = 0` and `z = 0`; its own bodies are in that
+//! frame. A body from elsewhere (MakeHuman's exports stand centred on the origin, feet at
+//! `y = -0.82 m`) would leave the panels hanging in the air beside it.
+//!
+//! The body is left where it is when it is *under* the pattern: its height range meets the
+//! placed panels' and the panels' horizontal centre lies within its box (a column or a form
+//! placed for the pattern, a GarmentCode body). Otherwise it is moved by
+//! `(-c_x, -min_y, -c_z)` (`c` its box's centre): feet on the floor, centred like the
+//! GarmentCode bodies.
+//!
+//! ```
+//! use drapekit::garment::frame::body_offset;
+//! use drapekit::math::{Aabb, Point3};
+//! // Panels from 1.0 to 1.4 m up around x = 0, z = 0.02; a body centred on the origin.
+//! let panels = Aabb { min: Point3::new(-0.3, 1.0, -0.2), max: Point3::new(0.3, 1.4, 0.25) };
+//! let body = Aabb { min: Point3::new(-0.5, -0.82, -0.1), max: Point3::new(0.5, 0.85, 0.32) };
+//! let d = body_offset(&panels, &body).unwrap();
+//! assert_eq!((d.x, d.y), (0.0, 0.82));
+//! assert!((d.z + 0.11).abs() < 1e-12);
+//! // A body standing on the floor under the panels stays.
+//! let body = Aabb { min: Point3::new(-0.6, 0.0, -0.15), max: Point3::new(0.6, 1.72, 0.15) };
+//! assert!(body_offset(&panels, &body).is_none());
+//! ```
+
+use super::Pattern;
+use crate::math::{Aabb, Point3, Vec3};
+
+/// The box of the pattern's placed panel vertices, in metres, in the pattern's frame (y up);
+/// `None` without vertices.
+pub fn placed_box(pattern: &Pattern) -> Option<Aabb> {
+    let scale = 1.0 / pattern.units_in_meter;
+    let points: Vec<Point3> = (pattern.panels.iter())
+        .flat_map(|p| p.vertices.iter().map(move |v| p.place(*v)))
+        .map(|q| Point3::from(q.coords * scale))
+        .collect();
+    Aabb::of_points(&points)
+}
+
+/// The shift that brings a body with box `body` under panels with box `panels` (both y up, in
+/// metres), or `None` when it is there already (module notes).
+pub fn body_offset(panels: &Aabb, body: &Aabb) -> Option<Vec3> {
+    let meets = body.min.y <= panels.max.y && panels.min.y <= body.max.y;
+    let c = panels.center();
+    let under =
+        (body.min.x..=body.max.x).contains(&c.x) && (body.min.z..=body.max.z).contains(&c.z);
+    if meets && under {
+        return None;
+    }
+    let b = body.center();
+    Some(Vec3::new(-b.x, -body.min.y, -b.z))
+}
