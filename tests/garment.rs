@@ -329,17 +329,17 @@ fn sewing_gives_the_same_bits_with_one_or_two_threads() {
     assert!(one.0 == two.0 && one.1 == two.1);
 }
 
-#[test]
-fn the_garment_command_reports_a_tube_on_a_cylinder() {
+/// Runs `garment` with the tube pattern on `body` (drapekit's frame, written y up as
+/// `column.obj`) at 2 cm, 0.1 s of drape, `--json` and `extra`, into `out` of the returned
+/// folder: the folder, the report, and stderr.
+fn tube_on(body: &TriMesh, extra: &[&str]) -> (tempfile::TempDir, serde_json::Value, String) {
     let dir = tempfile::tempdir().unwrap();
     let pattern = dir.path().join("tube_specification.json");
     std::fs::write(&pattern, tube()).unwrap();
-    // The cylinder in the pattern's frame (y up): drapekit's (x, y, z) is the file's (x, z, -y).
-    let body = common::cylinder(0.186, 0.5, 1.5, 48);
     let body_path = dir.path().join("column.obj");
-    common::write_y_up_obj(&body, &body_path);
+    common::write_y_up_obj(body, &body_path);
     let out = dir.path().join("out");
-    let o = common::run(&[
+    let mut args = vec![
         "garment",
         pattern.to_str().unwrap(),
         "--body",
@@ -350,14 +350,22 @@ fn the_garment_command_reports_a_tube_on_a_cylinder() {
         "0.02",
         "--settle-max",
         "0.1",
-        "--panels",
-        "--glb",
-        "--preview",
         "--json",
-    ]);
+    ];
+    args.extend_from_slice(extra);
+    let o = common::run(&args);
     let (stdout, stderr) = common::text(&o);
     assert!(o.status.success(), "{stderr}");
     let r: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    (dir, r, stderr)
+}
+
+#[test]
+fn the_garment_command_reports_a_tube_on_a_cylinder() {
+    // The cylinder in the pattern's frame (y up): drapekit's (x, y, z) is the file's (x, z, -y).
+    let body = common::cylinder(0.186, 0.5, 1.5, 48);
+    let (dir, r, stderr) = tube_on(&body, &["--panels", "--glb", "--preview"]);
+    let out = dir.path().join("out");
     let g = &r["garment"];
     assert!(r["sew"]["done"].as_bool().unwrap(), "{}", r["sew"]);
     assert!(g["seam_gap_max_mm"].as_f64().unwrap() <= 1.0, "{g}");
@@ -1093,33 +1101,13 @@ fn a_circle_skirt_on_a_cone_hangs_symmetric() {
 /// panels, the shift said, and the tube sews round it as round the column in place.
 #[test]
 fn a_body_away_from_the_panels_is_moved_under_them() {
-    let dir = tempfile::tempdir().unwrap();
-    let pattern = dir.path().join("tube_specification.json");
-    std::fs::write(&pattern, tube()).unwrap();
     // drapekit's (x, y, z) is the file's (x, -z, y): the file's shift (1.5, -0.9, 0.4).
     let mut body = common::cylinder(0.186, 0.0, 1.5, 48);
     for p in &mut body.positions {
         *p += Vec3::new(1.5, -0.4, -0.9);
     }
-    let body_path = dir.path().join("column.obj");
-    common::write_y_up_obj(&body, &body_path);
+    let (dir, r, _) = tube_on(&body, &[]);
     let out = dir.path().join("out");
-    let o = common::run(&[
-        "garment",
-        pattern.to_str().unwrap(),
-        "--body",
-        body_path.to_str().unwrap(),
-        "-o",
-        out.to_str().unwrap(),
-        "--spacing",
-        "0.02",
-        "--settle-max",
-        "0.1",
-        "--json",
-    ]);
-    let (stdout, stderr) = common::text(&o);
-    assert!(o.status.success(), "{stderr}");
-    let r: serde_json::Value = serde_json::from_str(&stdout).unwrap();
     let assumed = r["assumed"][0].as_str().unwrap();
     assert!(
         assumed.contains("moved into the pattern's frame by (-1.5, 0.9, -0.4) m"),
