@@ -407,6 +407,7 @@ fn the_garment_command_reports_a_tube_on_a_cylinder() {
         assumed.ends_with("y up, in the pattern's frame"),
         "{assumed}"
     );
+    assert!(r["body_moved_m"].is_null(), "{}", r["body_moved_m"]);
     // The garment as one OBJ with a group per panel, the body as placed, and (`--panels`)
     // each panel alone: together they hold every particle and triangle once.
     assert_eq!(
@@ -1112,6 +1113,14 @@ fn a_body_away_from_the_panels_is_moved_under_them() {
     assert!(
         assumed.contains("moved into the pattern's frame by (-1.5, 0.9, -0.4) m"),
         "{assumed}"
+    );
+    let moved: Vec<f64> = (r["body_moved_m"].as_array().unwrap().iter())
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    let want = [-1.5, 0.9, -0.4];
+    assert!(
+        moved.iter().zip(want).all(|(m, w)| (m - w).abs() < 1e-12),
+        "{moved:?}"
     );
     let g = &r["garment"];
     assert!(r["sew"]["done"].as_bool().unwrap(), "{}", r["sew"]);

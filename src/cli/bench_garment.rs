@@ -96,7 +96,7 @@ pub fn run(a: GarmentBench) -> anyhow::Result<()> {
     for (p, b) in RUNS.into_iter().filter(|(p, b)| keep(p, b)) {
         let pattern_path = dir.join(format!("patterns/{p}_specification.json"));
         let pattern = crate::garment::read(&pattern_path)?;
-        let (body, _) = read_body(&dir.join(format!("bodies/{b}.obj")), "auto", &pattern)?;
+        let body = read_body(&dir.join(format!("bodies/{b}.obj")), "auto", &pattern)?.mesh;
         let t = Instant::now();
         let g = gd::sew_and_drape(
             &pattern,

@@ -10,7 +10,7 @@ use crate::garment::measure::{self, Measures, Thresholds};
 use crate::garment::spec::Pattern;
 use crate::garment::spots::{spots, Spot, SpotKind};
 use crate::io::{self, ReadOptions};
-use crate::math::short;
+use crate::math::{short, Vec3};
 use crate::mesh::prepare::{prepare, PrepareOptions};
 use crate::mesh::transform::{change_up, change_up_point, Units, Up};
 use crate::mesh::TriMesh;
@@ -102,6 +102,9 @@ pub struct GarmentReport {
     pub body: String,
     /// What was assumed about units and frames.
     pub assumed: Vec<String>,
+    /// How far the body was moved to stand under the panels (`garment::frame`), m, in the
+    /// pattern's frame (y up); `None` when it stood there already.
+    pub body_moved_m: Option<[f64; 3]>,
     /// The fabric preset.
     pub fabric: String,
     /// Particle spacing, m.
@@ -211,14 +214,17 @@ pub(super) fn outcome(
     (o, g.world)
 }
 
+/// A body read for a pattern: the mesh (metres, z up), what was assumed, and how far it was
+/// moved (m, y up).
+pub(super) struct Body {
+    pub mesh: TriMesh,
+    pub note: String,
+    pub moved: Option<Vec3>,
+}
+
 /// The body read, prepared, in metres (units from `spec`, or guessed from its height), moved
-/// under `pattern`'s panels when it is elsewhere (`garment::frame`), and z up. Returns it and
-/// what was assumed.
-pub(super) fn read_body(
-    path: &Path,
-    spec: &str,
-    pattern: &Pattern,
-) -> anyhow::Result<(TriMesh, String)> {
+/// under `pattern`'s panels when it is elsewhere (`garment::frame`), and z up.
+pub(super) fn read_body(path: &Path, spec: &str, pattern: &Pattern) -> anyhow::Result<Body> {
     let read = io::read_mesh(path, &ReadOptions::default())?;
     let mut mesh = read.mesh;
     prepare(&mut mesh, &PrepareOptions::default());
@@ -274,7 +280,11 @@ pub(super) fn read_body(
         format!("{units:?}").to_lowercase(),
         height * f
     );
-    Ok((mesh, note))
+    Ok(Body {
+        mesh,
+        note,
+        moved: shift,
+    })
 }
 
 /// Checks the flags and builds the settings.
@@ -509,7 +519,11 @@ pub fn run(args: GarmentArgs) -> anyhow::Result<()> {
     if args.panels {
         check_panel_names(&pattern, &args.pattern)?;
     }
-    let (body, body_note) = read_body(&args.body, &args.body_units, &pattern)?;
+    let Body {
+        mesh: body,
+        note: body_note,
+        moved,
+    } = read_body(&args.body, &args.body_units, &pattern)?;
     if args.output.is_file() {
         bail!(
             "{} is a file: the output must be a directory",
@@ -603,6 +617,7 @@ pub fn run(args: GarmentArgs) -> anyhow::Result<()> {
         pattern: args.pattern.display().to_string(),
         body: args.body.display().to_string(),
         assumed,
+        body_moved_m: moved.map(|d| [d.x, d.y, d.z]),
         fabric: args.fabric.clone(),
         spacing: args.spacing,
         body_closed: c.closed,
