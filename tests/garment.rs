@@ -1143,3 +1143,41 @@ fn a_body_away_from_the_panels_is_moved_under_them() {
     assert!(fit["rings"][0]["judged"].as_bool().unwrap(), "{fit}");
     assert_eq!(fit["too_short"], 0, "{fit}");
 }
+
+/// The real bodies: the GarmentCode ones stand under every real pattern's panels and stay;
+/// MakeHuman's export stands centred on the origin (feet at y = -0.817 m) and is moved up by
+/// its feet's depth and back by the centre of its depth.
+#[test]
+fn the_garmentcode_bodies_stay_and_a_makehuman_body_is_moved_under_the_panels() {
+    use drapekit::garment::frame::{body_offset, placed_box};
+    let Some(root) = common::realdata() else {
+        return;
+    };
+    let patterns = ["dress_pencil", "hoody_mean", "js_mean_all", "shirt_mean"];
+    let body_box = |name: &str| {
+        let path = root.join(format!("bodies/{name}.obj"));
+        let mesh = drapekit::io::read_mesh(&path, &Default::default())
+            .unwrap()
+            .mesh;
+        mesh.bbox().unwrap()
+    };
+    let makehuman = body_box("makehuman_hm08_body_only_m");
+    for p in patterns {
+        let path = root.join(format!("patterns/{p}_specification.json"));
+        let panels = placed_box(&drapekit::garment::read(&path).unwrap()).unwrap();
+        for b in ["mean_all", "mean_female", "mean_male"] {
+            assert_eq!(body_offset(&panels, &body_box(b)), None, "{p} on {b}");
+        }
+        let d = body_offset(&panels, &makehuman).expect(p);
+        let want = [-0.5 * (makehuman.min.x + makehuman.max.x), -makehuman.min.y];
+        assert!(
+            (d.x - want[0]).abs() < 1e-12 && (d.y - want[1]).abs() < 1e-12,
+            "{p}: {d}"
+        );
+        assert!((d.y - 0.81676).abs() < 1e-9, "{p}: {d}");
+        assert!(
+            (d.z + 0.5 * (makehuman.min.z + makehuman.max.z)).abs() < 1e-12,
+            "{p}: {d}"
+        );
+    }
+}

@@ -4,10 +4,11 @@
 //! `y = -0.82 m`) would leave the panels hanging in the air beside it.
 //!
 //! The body is left where it is when it is *under* the pattern: its height range meets the
-//! placed panels' and the panels' horizontal centre lies within its box (a column or a form
-//! placed for the pattern, a GarmentCode body). Otherwise it is moved by
-//! `(-c_x, -min_y, -c_z)` (`c` its box's centre): feet on the floor, centred like the
-//! GarmentCode bodies.
+//! placed panels', the panels' horizontal centre lies within its box, and it does not reach
+//! more than [`FLOOR_TOL`] below the floor (a column or a form placed for the pattern, a
+//! GarmentCode body). Otherwise it is moved by `(-c_x, -min_y, -c_z)` (`c` its box's centre):
+//! feet on the floor, centred like the GarmentCode bodies. (The floor test matters: MakeHuman's
+//! body reaches from -0.82 to 0.85 m, which meets a dress's 0.11 to 1.40 m.)
 //!
 //! ```
 //! use drapekit::garment::frame::body_offset;
@@ -18,6 +19,9 @@
 //! let d = body_offset(&panels, &body).unwrap();
 //! assert_eq!((d.x, d.y), (0.0, 0.82));
 //! assert!((d.z + 0.11).abs() < 1e-12);
+//! // One that meets the panels but reaches 0.82 m below the floor is moved too.
+//! let body = Aabb { min: Point3::new(-0.5, -0.82, -0.1), max: Point3::new(0.5, 1.2, 0.32) };
+//! assert_eq!(body_offset(&panels, &body).map(|d| d.y), Some(0.82));
 //! // A body standing on the floor under the panels stays.
 //! let body = Aabb { min: Point3::new(-0.6, 0.0, -0.15), max: Point3::new(0.6, 1.72, 0.15) };
 //! assert!(body_offset(&panels, &body).is_none());
@@ -25,6 +29,9 @@
 
 use super::Pattern;
 use crate::math::{Aabb, Point3, Vec3};
+
+/// How far below the floor (`y = 0`) a body may reach and still be in the pattern's frame, m.
+pub const FLOOR_TOL: f64 = 0.05;
 
 /// The box of the pattern's placed panel vertices, in metres, in the pattern's frame (y up);
 /// `None` without vertices.
@@ -44,7 +51,7 @@ pub fn body_offset(panels: &Aabb, body: &Aabb) -> Option<Vec3> {
     let c = panels.center();
     let under =
         (body.min.x..=body.max.x).contains(&c.x) && (body.min.z..=body.max.z).contains(&c.z);
-    if meets && under {
+    if meets && under && body.min.y >= -FLOOR_TOL {
         return None;
     }
     let b = body.center();
