@@ -25,7 +25,8 @@ use std::path::{Path, PathBuf};
 pub struct GarmentArgs {
     /// The sewing pattern (GarmentCode specification JSON).
     pub pattern: PathBuf,
-    /// The body (a closed mesh in the pattern's frame: y up, feet at y = 0).
+    /// The body (a closed mesh, y up, in the pattern's frame: feet at y = 0, centred on x = 0 and
+    /// z = 0; a body that is not under the panels is moved there, and the summary says so).
     #[arg(long, value_name = "BODY")]
     pub body: PathBuf,
     /// The output directory: the garment (one OBJ, a group per panel) and the body as placed.
