@@ -36,6 +36,24 @@ fn run_json(args: &[&str]) -> serde_json::Value {
     serde_json::from_str(&stdout).unwrap()
 }
 
+/// Runs `drape --json` on the scene `text` (written as `scene.toml` into the tube's folder,
+/// after `prepare` has had the folder): the folder, the report and stderr.
+fn scene_json(
+    text: &str,
+    prepare: impl FnOnce(&Path),
+) -> (tempfile::TempDir, serde_json::Value, String) {
+    let dir = tube_folder();
+    let d = dir.path();
+    prepare(d);
+    let scene = d.join("scene.toml");
+    std::fs::write(&scene, text).unwrap();
+    let args = ["drape", scene.to_str().unwrap(), "-o"];
+    let o = common::run(&[&args[..], &[d.join("s").to_str().unwrap(), "--json"]].concat());
+    let (stdout, stderr) = common::text(&o);
+    assert!(o.status.success(), "{stderr}");
+    (dir, serde_json::from_str(&stdout).unwrap(), stderr)
+}
+
 #[test]
 fn a_garment_scene_drapes_as_the_garment_command_does() {
     let dir = tube_folder();
@@ -196,18 +214,10 @@ fn a_garment_scene_runs_the_fit_check_on_its_objects_where_the_garment_is_placed
     // The tube (120 cm round) and a column 157 cm round: both ends are too short, as the
     // garment command says of the same files. The scene lifts the column and the tube 50 cm
     // and turns the tube a quarter: the same rings, the same girths, 50 cm higher.
-    let dir = tube_folder();
-    let d = dir.path();
-    let fat = common::cylinder(0.25, 0.5, 1.5, 48);
-    common::write_y_up_obj(&fat, &d.join("fat.obj"));
-    let scene = d.join("lifted.toml");
     let text = "[[object]]\nmesh = \"fat.obj\"\nup = \"y\"\ntranslate = [0, 0, 0.5]\n\n[[garment]]\npattern = \"tube_specification.json\"\nspacing = 0.05\ntranslation = [0, 0, 0.5]\nrotation = 90\nsew_max = 0.02\nsettle_max = 0.02\n";
-    std::fs::write(&scene, text).unwrap();
-    let args = ["drape", scene.to_str().unwrap(), "-o"];
-    let o = common::run(&[&args[..], &[d.join("s").to_str().unwrap(), "--json"]].concat());
-    let (stdout, stderr) = common::text(&o);
-    assert!(o.status.success(), "{stderr}");
-    let s: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    let fat = common::cylinder(0.25, 0.5, 1.5, 48);
+    let (dir, s, stderr) = scene_json(text, |d| common::write_y_up_obj(&fat, &d.join("fat.obj")));
+    let d = dir.path();
     let g = run_json(&[
         "garment",
         d.join("tube_specification.json").to_str().unwrap(),
@@ -228,6 +238,8 @@ fn a_garment_scene_runs_the_fit_check_on_its_objects_where_the_garment_is_placed
     assert_eq!(fg["too_short"], 2, "{fg}");
     // Two warnings on stderr before the run, one per end.
     assert_eq!(stderr.matches("warning: fit check").count(), 2, "{stderr}");
+    // The tube is placed round the column: no placement warning.
+    assert_eq!(s["warnings"], serde_json::json!([]), "{}", s["warnings"]);
     let rings = |f: &serde_json::Value| f["rings"].as_array().unwrap().clone();
     assert_eq!(rings(fs).len(), 2);
     let num = |v: &serde_json::Value| v.as_f64().unwrap();
@@ -246,6 +258,20 @@ fn a_garment_scene_runs_the_fit_check_on_its_objects_where_the_garment_is_placed
         let girth = 96.0 * 0.25 * (std::f64::consts::PI / 48.0).sin();
         assert!((num(&a["body_girth_m"][0]) - girth).abs() < 1e-6, "{a}");
     }
+}
+
+#[test]
+fn a_garment_placed_beside_the_objects_is_warned_of_before_the_run() {
+    // The column moved 2 m along x, the tube left where the pattern puts it.
+    let text = "[[object]]\nmesh = \"column.obj\"\nup = \"y\"\ntranslate = [2, 0, 0]\n\n[[garment]]\npattern = \"tube_specification.json\"\nspacing = 0.05\nsew_max = 0.02\nsettle_max = 0.02\n";
+    let (_dir, s, stderr) = scene_json(text, |_| {});
+    let w = s["warnings"].as_array().unwrap();
+    assert_eq!(w.len(), 1, "{w:?}");
+    let w = w[0].as_str().unwrap();
+    assert!(w.contains("not round the scene's objects"), "{w}");
+    // The objects' span in the pattern's frame: the column's x from 2 - 0.186 to 2 + 0.186.
+    assert!(w.contains("the objects x 1.814 to 2.186"), "{w}");
+    assert!(stderr.contains("warning:") && stderr.contains("translation and rotation"));
 }
 
 /// Runs `drape` on the scene `text`, written as `bad.toml` into `dir` beside the tube's files,

@@ -11,8 +11,10 @@ use super::garment::{
 use crate::collide::Collider;
 use crate::garment::drape as gd;
 use crate::garment::fit_check::{fit_check, FitCheck};
+use crate::garment::frame;
 use crate::io::{self, WriteOptions};
-use crate::mesh::transform::{Units, Up};
+use crate::math::{short, Aabb, Point3};
+use crate::mesh::transform::{change_up_point, Units, Up};
 use crate::mesh::TriMesh;
 use crate::scene::Scene;
 use crate::sim;
@@ -42,6 +44,9 @@ pub struct GarmentSceneReport {
     /// checked before the simulation (`garment::fit_check`; lengths in m, heights in m in the
     /// scene's frame; `null`: no closed object).
     pub fit_check: Option<FitCheck>,
+    /// What looked wrong before the run, also printed: the pattern's panels not round the
+    /// scene's objects (`garment::frame`: a wrong `translation` or `rotation`).
+    pub warnings: Vec<String>,
     /// The sewn and draped garment, measured and judged.
     #[serde(flatten)]
     pub outcome: GarmentOutcome,
@@ -74,6 +79,12 @@ pub(super) fn run(args: &DrapeArgs, sc: Scene, start: std::time::Instant) -> any
     let fit = scene_fit_check(&spec.pattern, &bodies, settings)?;
     if let Some(f) = &fit {
         warn_too_short(f);
+    }
+    let warnings: Vec<String> = placement_warning(&spec.pattern, &bodies, settings)
+        .into_iter()
+        .collect();
+    for w in &warnings {
+        eprintln!("warning: {}: {w}", sc.path.display());
     }
     super::remove_stale_temps(&[out]);
     let progress = |t: f64| {
@@ -175,6 +186,7 @@ pub(super) fn run(args: &DrapeArgs, sc: Scene, start: std::time::Instant) -> any
         spacing: settings.assemble.spacing * to_units,
         objects: object_reports(&world, to_units, object_files),
         fit_check: fit,
+        warnings,
         outcome,
         files,
         command_seconds: start.elapsed().as_secs_f64(),
@@ -205,6 +217,36 @@ fn print_summary(r: &GarmentSceneReport) {
         print_fit_check(f);
     }
     print_outcome(&r.outcome, r.command_seconds);
+}
+
+/// A warning when the scene's objects are not round the pattern's panels in the pattern's
+/// frame (`garment::frame::under`: the garment would be sewn in the air beside them). A scene
+/// places its objects itself: nothing is moved.
+fn placement_warning(
+    pattern: &crate::garment::Pattern,
+    bodies: &[Collider],
+    settings: &gd::GarmentSettings,
+) -> Option<String> {
+    let placement = &settings.assemble.placement;
+    let points: Vec<Point3> = (bodies.iter())
+        .flat_map(|c| c.mesh.positions.iter())
+        .map(|p| change_up_point(placement.unapply(*p), Up::Z, Up::Y))
+        .collect();
+    let objects = Aabb::of_points(&points)?;
+    let panels = frame::placed_box(pattern)?;
+    if frame::under(&panels, &objects) {
+        return None;
+    }
+    let span = |b: &Aabb| {
+        let r = |k: usize| format!("{} to {}", short(b.min[k]), short(b.max[k]));
+        format!("x {}, y {}, z {}", r(0), r(1), r(2))
+    };
+    Some(format!(
+        "the garment's panels are not round the scene's objects: in the pattern's frame (m, y \
+         up) the panels span {} and the objects {}; check [[garment]]'s translation and rotation",
+        span(&panels),
+        span(&objects)
+    ))
 }
 
 /// The fit check of a scene's garment on the scene's closed objects (`None`: there are none):

@@ -44,14 +44,18 @@ pub fn placed_box(pattern: &Pattern) -> Option<Aabb> {
     Aabb::of_points(&points)
 }
 
+/// Whether a body with box `body` is round the panels with box `panels` (both y up): its height
+/// range meets theirs and its box holds their horizontal centre.
+pub fn under(panels: &Aabb, body: &Aabb) -> bool {
+    let meets = body.min.y <= panels.max.y && panels.min.y <= body.max.y;
+    let c = panels.center();
+    meets && (body.min.x..=body.max.x).contains(&c.x) && (body.min.z..=body.max.z).contains(&c.z)
+}
+
 /// The shift that brings a body with box `body` under panels with box `panels` (both y up, in
 /// metres), or `None` when it is there already (module notes).
 pub fn body_offset(panels: &Aabb, body: &Aabb) -> Option<Vec3> {
-    let meets = body.min.y <= panels.max.y && panels.min.y <= body.max.y;
-    let c = panels.center();
-    let under =
-        (body.min.x..=body.max.x).contains(&c.x) && (body.min.z..=body.max.z).contains(&c.z);
-    if meets && under && body.min.y >= -FLOOR_TOL {
+    if under(panels, body) && body.min.y >= -FLOOR_TOL {
         return None;
     }
     let b = body.center();
