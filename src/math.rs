@@ -132,7 +132,7 @@ impl SplitMix {
 }
 
 /// `x` for people: at most four significant digits, plain between 1e-3 and 1e4, else in
-/// scientific notation (never hundreds of digits).
+/// scientific notation (never hundreds of digits); zero is "0", whatever its sign.
 ///
 /// ```
 /// use drapekit::math::short;
@@ -140,10 +140,15 @@ impl SplitMix {
 /// assert_eq!(short(1.0 / 3.0), "0.3333");
 /// assert_eq!(short(1e-300), "1.000e-300");
 /// assert_eq!(short(2500.0), "2500");
+/// assert_eq!(short(-0.0), "0");
 /// ```
 pub fn short(x: f64) -> String {
     let a = x.abs();
-    if x == 0.0 || !x.is_finite() {
+    if x == 0.0 {
+        // No "-0".
+        return "0".into();
+    }
+    if !x.is_finite() {
         return format!("{x}");
     }
     if !(1e-3..1e4).contains(&a) {

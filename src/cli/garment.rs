@@ -261,17 +261,15 @@ pub(super) fn read_body(path: &Path, spec: &str, pattern: &Pattern) -> anyhow::R
     let frame_note = match shift {
         None => "in the pattern's frame".to_string(),
         Some(d) => {
-            // Four significant digits, and no "-0".
-            let round = |v: f64| short(if v == 0.0 { 0.0 } else { v });
             for p in &mut mesh.positions {
                 *p += d;
             }
             format!(
                 "moved into the pattern's frame by ({}, {}, {}) m (feet to y = 0, centred on x \
                  and z: it was not under the panels)",
-                round(d.x),
-                round(d.y),
-                round(d.z)
+                short(d.x),
+                short(d.y),
+                short(d.z)
             )
         }
     };
