@@ -206,6 +206,39 @@ fn the_spots_say_where_a_garment_fails() {
 }
 
 #[test]
+fn an_open_seam_is_named_with_where_its_widest_gap_is() {
+    use drapekit::garment::measure::open_seams;
+    let pattern = parse(SHOULDER, Path::new("shoulder.json")).unwrap();
+    let mut settings = GarmentSettings::default();
+    settings.assemble.spacing = 0.02;
+    let (bar, _, _) = shoulder_bar();
+    let (mut world, seams, _) =
+        garment_world(&pattern, vec![body_collider(bar)], &settings).unwrap();
+    // Close every pair, then open one 30 mm and another of the same stitch 12 mm.
+    for s in &seams {
+        world.state.x[s.b as usize] = world.state.x[s.a as usize];
+    }
+    let (wide, narrow) = (&seams[3], &seams[5]);
+    assert_eq!(wide.stitch, narrow.stitch);
+    world.state.x[wide.b as usize].x += 0.03;
+    world.state.x[narrow.b as usize].y += 0.012;
+    let open = open_seams(&pattern, &seams, &world.state.x, 1.0);
+    assert_eq!(open.len(), 1, "{open:?}");
+    let o = &open[0];
+    assert_eq!(o.stitch, wide.stitch + 1);
+    assert!((o.gap_max_mm - 30.0).abs() < 1e-9, "{o:?}");
+    let (a, b) = (
+        world.state.x[wide.a as usize],
+        world.state.x[wide.b as usize],
+    );
+    let mid = nalgebra::center(&a, &b);
+    assert!((Point3::from(o.at) - mid).norm() < 1e-12, "{o:?}");
+    assert_eq!(o.height_m, mid.z);
+    // Nothing is open past 31 mm.
+    assert!(open_seams(&pattern, &seams, &world.state.x, 31.0).is_empty());
+}
+
+#[test]
 fn an_ear_on_the_bar_does_not_poke_through_the_cloth_sewn_over_it() {
     // A steep pyramid (an ear: a 1 cm square base, 8 mm high) on top of the bar, between the
     // particles of the 2 cm cloth: the particle pass keeps every particle off it, but without

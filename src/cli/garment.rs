@@ -184,9 +184,10 @@ pub(super) fn outcome(
         mut spots,
         spots_left_out,
     } = judge(&g);
+    let to_mesh =
+        |at: &mut [f64; 3]| *at = (change_up_point((*at).into(), Up::Z, up) * to_units).into();
     for s in &mut spots {
-        let p = change_up_point(s.at.into(), Up::Z, up) * to_units;
-        s.at = p.into();
+        to_mesh(&mut s.at);
     }
     let o = GarmentOutcome {
         particles: g.world.model.len(),
@@ -197,12 +198,7 @@ pub(super) fn outcome(
         moving_fraction: moving,
         garment: whole,
         panels,
-        open_seams: measure::open_seams(
-            pattern,
-            &g.seams,
-            &g.world.state.x,
-            thresholds.seam_gap_max_mm,
-        ),
+        open_seams: open_seams(pattern, &g, thresholds.seam_gap_max_mm, to_mesh),
         gathers: crate::garment::gathers::gathers(pattern),
         thresholds,
         verdict: if failed.is_empty() { "pass" } else { "fail" }.into(),
@@ -486,6 +482,20 @@ pub(super) struct Judged {
 }
 
 /// Measures `g` and judges it by the default thresholds (inside: in any closed body).
+/// The stitches open wider than `limit_mm`, placed in the mesh's frame by `to_mesh`.
+fn open_seams(
+    pattern: &Pattern,
+    g: &gd::Garment,
+    limit_mm: f64,
+    to_mesh: impl Fn(&mut [f64; 3]),
+) -> Vec<measure::OpenSeam> {
+    let mut open = measure::open_seams(pattern, &g.seams, &g.world.state.x, limit_mm);
+    for o in &mut open {
+        to_mesh(&mut o.at);
+    }
+    open
+}
+
 pub(super) fn judge(g: &gd::Garment) -> Judged {
     // The drape's last frame (1/60 s); a drape too short for one frame counts as moving.
     let moving = g.drape.moving_fraction.unwrap_or(1.0);
@@ -750,8 +760,8 @@ pub(super) fn print_outcome(r: &GarmentOutcome, wall_seconds: f64) {
     }
     for o in r.open_seams.iter().take(5) {
         println!(
-            "    open seam: stitch {} ({} to {}), gap {:.1} mm",
-            o.stitch, o.edges[0], o.edges[1], o.gap_max_mm
+            "    open seam: stitch {} ({} to {}), gap {:.1} mm, {:.2} m up",
+            o.stitch, o.edges[0], o.edges[1], o.gap_max_mm, o.height_m
         );
     }
     if let Some(g) = r.gathers.iter().max_by(|a, b| a.ratio.total_cmp(&b.ratio)) {

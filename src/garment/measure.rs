@@ -222,6 +222,11 @@ pub struct OpenSeam {
     pub edges: [String; 2],
     /// Its largest gap, mm.
     pub gap_max_mm: f64,
+    /// The middle of that gap, in the simulation's frame (metres, z up) as measured; the
+    /// `garment` command's report gives it in the garment mesh's frame and units.
+    pub at: [f64; 3],
+    /// The height of that middle along the up axis, m (on a body, above its feet).
+    pub height_m: f64,
 }
 
 /// The stitches with a gap above `limit_mm`, widest first.
@@ -231,20 +236,25 @@ pub fn open_seams(
     x: &[crate::math::Point3],
     limit_mm: f64,
 ) -> Vec<OpenSeam> {
-    let mut widest = vec![0.0f64; pattern.stitches.len()];
+    let mut widest = vec![(0.0f64, [0.0; 3]); pattern.stitches.len()];
     for s in seams {
-        let g = (x[s.a as usize] - x[s.b as usize]).norm() * 1e3;
-        widest[s.stitch] = widest[s.stitch].max(g);
+        let (a, b) = (x[s.a as usize], x[s.b as usize]);
+        let g = (a - b).norm() * 1e3;
+        if g > widest[s.stitch].0 {
+            widest[s.stitch] = (g, nalgebra::center(&a, &b).into());
+        }
     }
     let name = |e: &super::EdgeRef| format!("{}:{}", pattern.panels[e.panel].name, e.edge);
     let mut open: Vec<OpenSeam> = widest
         .iter()
         .enumerate()
-        .filter(|(_, &g)| g > limit_mm)
-        .map(|(i, &g)| OpenSeam {
+        .filter(|(_, &(g, _))| g > limit_mm)
+        .map(|(i, &(g, at))| OpenSeam {
             stitch: i + 1,
             edges: [name(&pattern.stitches[i].a), name(&pattern.stitches[i].b)],
             gap_max_mm: g,
+            at,
+            height_m: at[2],
         })
         .collect();
     open.sort_by(|a, b| b.gap_max_mm.total_cmp(&a.gap_max_mm));
