@@ -394,6 +394,38 @@ fn tube_on(body: &TriMesh, extra: &[&str]) -> (tempfile::TempDir, serde_json::Va
 }
 
 #[test]
+fn the_report_names_the_stitches_sewing_left_open_and_where() {
+    // Two checks of sewing (0.04 s) leave both side seams open; the drape then pulls them.
+    let body = common::cylinder(0.186, 0.5, 1.5, 48);
+    let (_dir, r, _) = tube_on(&body, &["--sew-max", "0.04"]);
+    assert!(!r["sew"]["done"].as_bool().unwrap(), "{}", r["sew"]);
+    let open = r["sew_open_seams"].as_array().unwrap();
+    assert_eq!(open.len(), 2, "{open:?}");
+    let gap = |o: &serde_json::Value| o["gap_max_mm"].as_f64().unwrap();
+    // Widest first, the widest is the sewing's largest gap, and each is over the 1 mm goal.
+    let widest = r["sew"]["seam_gap_max"].as_f64().unwrap() * 1e3;
+    assert!((gap(&open[0]) - widest).abs() < 1e-9, "{open:?} {widest}");
+    assert!(
+        gap(&open[0]) >= gap(&open[1]) && gap(&open[1]) > 1.0,
+        "{open:?}"
+    );
+    let mut stitches: Vec<u64> = open.iter().map(|o| o["stitch"].as_u64().unwrap()).collect();
+    stitches.sort();
+    assert_eq!(stitches, [1, 2]);
+    for o in open {
+        // In the body file's frame (y up, metres): the height is the y of `at`, on the tube's
+        // side (radius about 0.2 m) and within the cylinder's height.
+        let at: Vec<f64> = (o["at"].as_array().unwrap().iter())
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        assert_eq!(at[1], o["height_m"].as_f64().unwrap());
+        assert!(at[1] > 0.5 && at[1] < 1.5, "{o}");
+        let radius = at[0].hypot(at[2]);
+        assert!(radius > 0.18 && radius < 0.35, "{o}");
+    }
+}
+
+#[test]
 fn the_garment_command_reports_a_tube_on_a_cylinder() {
     // The cylinder in the pattern's frame (y up): drapekit's (x, y, z) is the file's (x, z, -y).
     let body = common::cylinder(0.186, 0.5, 1.5, 48);
@@ -401,6 +433,7 @@ fn the_garment_command_reports_a_tube_on_a_cylinder() {
     let out = dir.path().join("out");
     let g = &r["garment"];
     assert!(r["sew"]["done"].as_bool().unwrap(), "{}", r["sew"]);
+    assert_eq!(r["sew_open_seams"], serde_json::json!([]));
     assert!(g["seam_gap_max_mm"].as_f64().unwrap() <= 1.0, "{g}");
     assert_eq!(g["particles_inside"], 0, "{g}");
     assert_eq!(g["body_crossing_edges"], 0, "{g}");
@@ -1157,6 +1190,7 @@ fn a_body_away_from_the_panels_is_moved_under_them() {
     );
     let g = &r["garment"];
     assert!(r["sew"]["done"].as_bool().unwrap(), "{}", r["sew"]);
+    assert_eq!(r["sew_open_seams"], serde_json::json!([]));
     assert!(g["seam_gap_max_mm"].as_f64().unwrap() <= 1.0, "{g}");
     assert_eq!(g["body_crossing_edges"], 0, "{g}");
     assert_eq!(g["particles_inside"], 0, "{g}");

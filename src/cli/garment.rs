@@ -141,6 +141,9 @@ pub struct GarmentOutcome {
     pub tips: Option<crate::collide::body_points::Pushed>,
     /// Stage 1.
     pub sew: StageReport,
+    /// The stitches sewing left open (wider than its 1 mm goal), widest first, as
+    /// `open_seams`: where the drape's stiff seams had to pull them shut.
+    pub sew_open_seams: Vec<measure::OpenSeam>,
     /// Stage 2.
     pub drape: StageReport,
     /// Fraction of particles that moved more than 0.3 mm over the drape's last 1/60 s (1 when
@@ -206,6 +209,7 @@ pub(super) fn outcome(
         spots,
         spots_left_out,
         sew: g.sew,
+        sew_open_seams: in_mesh(g.sew_open, to_mesh),
         drape: g.drape,
     };
     (o, g.world)
@@ -489,7 +493,15 @@ fn open_seams(
     limit_mm: f64,
     to_mesh: impl Fn(&mut [f64; 3]),
 ) -> Vec<measure::OpenSeam> {
-    let mut open = measure::open_seams(pattern, &g.seams, &g.world.state.x, limit_mm);
+    let open = measure::open_seams(pattern, &g.seams, &g.world.state.x, limit_mm);
+    in_mesh(open, to_mesh)
+}
+
+/// `open`, placed in the mesh's frame by `to_mesh`.
+fn in_mesh(
+    mut open: Vec<measure::OpenSeam>,
+    to_mesh: impl Fn(&mut [f64; 3]),
+) -> Vec<measure::OpenSeam> {
     for o in &mut open {
         to_mesh(&mut o.at);
     }
@@ -723,6 +735,12 @@ pub(super) fn print_outcome(r: &GarmentOutcome, wall_seconds: f64) {
         r.sew.seam_gap_max * 1e3,
         r.sew.sew_weight
     );
+    for o in r.sew_open_seams.iter().take(3) {
+        println!(
+            "    left open: stitch {} ({} to {}), {:.1} mm, {:.2} m up",
+            o.stitch, o.edges[0], o.edges[1], o.gap_max_mm, o.height_m
+        );
+    }
     println!(
         "  drape: {:.2} s simulated ({}), {:.1}% still moving",
         r.drape.time,

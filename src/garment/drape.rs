@@ -240,6 +240,9 @@ pub struct Garment {
     pub seams: Vec<SeamPair>,
     /// Stage 1.
     pub sew: StageReport,
+    /// The stitches still open wider than `seam_closed` when sewing ended (before the drape's
+    /// stiff seams pulled them shut), widest first; in the simulation's frame.
+    pub sew_open: Vec<super::measure::OpenSeam>,
     /// Stage 2.
     pub drape: StageReport,
 }
@@ -534,11 +537,14 @@ pub fn sew_and_drape(
 ) -> Result<Garment, GarmentError> {
     let (mut world, seams, seam_k) = garment_world(pattern, bodies, settings)?;
     let sew_report = sew(&mut world, &seams, settings, progress, cancel)?;
+    let limit_mm = settings.seam_closed * 1e3;
+    let sew_open = super::measure::open_seams(pattern, &seams, &world.state.x, limit_mm);
     let drape = settle(&mut world, &seams, seam_k, settings, cancel)?;
     Ok(Garment {
         world,
         seams,
         sew: sew_report,
+        sew_open,
         drape,
     })
 }
