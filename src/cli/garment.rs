@@ -485,7 +485,6 @@ pub(super) struct Judged {
     pub spots_left_out: usize,
 }
 
-/// Measures `g` and judges it by the default thresholds (inside: in any closed body).
 /// The stitches open wider than `limit_mm`, placed in the mesh's frame by `to_mesh`.
 fn open_seams(
     pattern: &Pattern,
@@ -508,6 +507,7 @@ fn in_mesh(
     open
 }
 
+/// Measures `g` and judges it by the default thresholds (inside: in any closed body).
 pub(super) fn judge(g: &gd::Garment) -> Judged {
     // The drape's last frame (1/60 s); a drape too short for one frame counts as moving.
     let moving = g.drape.moving_fraction.unwrap_or(1.0);
