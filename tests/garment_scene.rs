@@ -89,6 +89,7 @@ fn a_garment_scene_drapes_as_the_garment_command_does() {
         "garment",
         "panels",
         "open_seams",
+        "sew_open_seams",
         "verdict",
         "failed",
         "moving_fraction",
