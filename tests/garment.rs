@@ -108,14 +108,26 @@ const SHOULDER: &str = r#"{"pattern": {"panels": {
   "parameters": {}, "parameter_order": [],
   "properties": {"curvature_coords": "relative", "units_in_meter": 100}}"#;
 
-#[test]
-fn a_seam_across_a_bar_is_sewn_over_it_not_through_it() {
+/// `SHOULDER` at 2 cm round the shoulder bar: the pattern, the settings, the world before
+/// sewing and its seams.
+fn shoulder_world() -> (
+    drapekit::garment::Pattern,
+    GarmentSettings,
+    drapekit::sim::World,
+    Vec<drapekit::garment::assemble::SeamPair>,
+) {
     let pattern = parse(SHOULDER, Path::new("shoulder.json")).unwrap();
     let mut settings = GarmentSettings::default();
     settings.assemble.spacing = 0.02;
-    let (bar, r, zc) = shoulder_bar();
-    let (mut world, seams, _) =
-        garment_world(&pattern, vec![body_collider(bar)], &settings).unwrap();
+    let (world, seams, _) =
+        garment_world(&pattern, vec![body_collider(shoulder_bar().0)], &settings).unwrap();
+    (pattern, settings, world, seams)
+}
+
+#[test]
+fn a_seam_across_a_bar_is_sewn_over_it_not_through_it() {
+    let (_, settings, mut world, seams) = shoulder_world();
+    let (_, r, zc) = shoulder_bar();
     let x = &world.state.x;
     assert!(seams.iter().all(|s| (x[s.a as usize].z - 1.2).abs() < 1e-9));
     let report = sew(&mut world, &seams, &settings, &|_| {}, None).unwrap();
@@ -137,12 +149,8 @@ fn a_seam_across_a_bar_is_sewn_over_it_not_through_it() {
 fn the_spots_say_where_a_garment_fails() {
     use drapekit::garment::measure::{crossings, Thresholds};
     use drapekit::garment::spots::{spots, SpotKind};
-    let pattern = parse(SHOULDER, Path::new("shoulder.json")).unwrap();
-    let mut settings = GarmentSettings::default();
-    settings.assemble.spacing = 0.02;
-    let (bar, _, zc) = shoulder_bar();
-    let (mut world, seams, _) =
-        garment_world(&pattern, vec![body_collider(bar)], &settings).unwrap();
+    let (_, _, mut world, seams) = shoulder_world();
+    let zc = shoulder_bar().2;
     let piece = |name: &str| world.model.pieces.iter().find(|p| p.name == name).unwrap();
     // A particle in the middle of the front panel pulled 5 cm out of it (every spring at it
     // strained far past 5%), and one of the back panel's moved onto the bar's axis (inside it,
@@ -208,12 +216,7 @@ fn the_spots_say_where_a_garment_fails() {
 #[test]
 fn an_open_seam_is_named_with_where_its_widest_gap_is() {
     use drapekit::garment::measure::open_seams;
-    let pattern = parse(SHOULDER, Path::new("shoulder.json")).unwrap();
-    let mut settings = GarmentSettings::default();
-    settings.assemble.spacing = 0.02;
-    let (bar, _, _) = shoulder_bar();
-    let (mut world, seams, _) =
-        garment_world(&pattern, vec![body_collider(bar)], &settings).unwrap();
+    let (pattern, _, mut world, seams) = shoulder_world();
     // Close every pair, then open one 30 mm and another of the same stitch 12 mm.
     for s in &seams {
         world.state.x[s.b as usize] = world.state.x[s.a as usize];
