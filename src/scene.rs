@@ -54,7 +54,7 @@ use crate::cloth::integrate::{Integrator, SolverSettings};
 use crate::cloth::pattern::{self, Pins};
 use crate::collide::grid::MAX_CELLS;
 use crate::garment::assemble::Placement;
-use crate::garment::drape::{GarmentSettings, SEW_ITERATIONS};
+use crate::garment::drape::{GarmentSettings, WaistHold, SEW_ITERATIONS};
 use crate::garment::Pattern;
 use crate::math::{short, Point2, Vec3};
 use crate::mesh::transform::{Units, Up};
@@ -266,6 +266,15 @@ struct GarmentFile {
     body_clearance: Option<f64>,
     self_collision: Option<bool>,
     cloth_friction: Option<f64>,
+    hold_waist: Option<HoldWaistFile>,
+}
+
+/// `garment.hold_waist`: `"off"`, `"auto"` or a height in the scene's units.
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum HoldWaistFile {
+    Word(String),
+    Height(f64),
 }
 
 #[derive(Deserialize, Clone, Copy)]
@@ -1234,6 +1243,20 @@ fn garment_spec(
     settings.sew_max = g.sew_max.unwrap_or(settings.sew_max);
     settings.settle_max = g.settle_max.unwrap_or(settings.settle_max);
     settings.body_clearance = length(g.body_clearance);
+    settings.hold_waist = match &g.hold_waist {
+        None => settings.hold_waist,
+        Some(HoldWaistFile::Height(z)) => WaistHold::Level(z * cx.to_m),
+        Some(HoldWaistFile::Word(w)) => match w.as_str() {
+            "off" => WaistHold::Off,
+            "auto" => WaistHold::Auto,
+            _ => {
+                let m =
+                    format!("expected \"off\", \"auto\" or a height (scene units), got \"{w}\"");
+                bad(&k("hold_waist"), m);
+                WaistHold::Off
+            }
+        },
+    };
     if g.self_collision == Some(false) {
         settings.self_collision = None;
     }

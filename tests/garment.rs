@@ -4,7 +4,7 @@ mod common;
 
 use drapekit::garment::assemble::{assemble, AssembleOptions};
 use drapekit::garment::drape::{
-    body_collider, garment_world, settle, sew, GarmentSettings, REST_FRACTION,
+    body_collider, garment_world, settle, sew, GarmentSettings, GarmentWorld, REST_FRACTION,
 };
 use drapekit::garment::measure::measures;
 use drapekit::garment::parse;
@@ -56,9 +56,13 @@ fn a_tube_sewn_round_a_cylinder_closes_and_is_round() {
     let r_body = 0.186;
     let clearance = 0.125 * settings.assemble.spacing;
     let body = common::cylinder(r_body, 0.5, 1.5, 48);
-    let (mut world, seams, seam_k) =
-        garment_world(&pattern, vec![body_collider(body)], &settings).unwrap();
-    let report = sew(&mut world, &seams, &settings, &|_| {}, None).unwrap();
+    let GarmentWorld {
+        mut world,
+        seams,
+        seam_k,
+        ..
+    } = garment_world(&pattern, vec![body_collider(body)], &settings).unwrap();
+    let report = sew(&mut world, &seams, None, &settings, &|_| {}, None).unwrap();
     assert!(report.done, "seams closed: {report:?}");
     assert!(report.seam_gap_max <= 1e-3);
     drapekit::garment::drape::set_seam_k(&mut world.model, seam_k);
@@ -119,7 +123,7 @@ fn shoulder_world() -> (
     let pattern = parse(SHOULDER, Path::new("shoulder.json")).unwrap();
     let mut settings = GarmentSettings::default();
     settings.assemble.spacing = 0.02;
-    let (world, seams, _) =
+    let GarmentWorld { world, seams, .. } =
         garment_world(&pattern, vec![body_collider(shoulder_bar().0)], &settings).unwrap();
     (pattern, settings, world, seams)
 }
@@ -130,7 +134,7 @@ fn a_seam_across_a_bar_is_sewn_over_it_not_through_it() {
     let (_, r, zc) = shoulder_bar();
     let x = &world.state.x;
     assert!(seams.iter().all(|s| (x[s.a as usize].z - 1.2).abs() < 1e-9));
-    let report = sew(&mut world, &seams, &settings, &|_| {}, None).unwrap();
+    let report = sew(&mut world, &seams, None, &settings, &|_| {}, None).unwrap();
     assert!(report.done, "seams closed: {report:?}");
     let x = &world.state.x;
     for s in &seams {
@@ -272,9 +276,14 @@ fn an_ear_on_the_bar_does_not_poke_through_the_cloth_sewn_over_it() {
             ],
         );
         let bodies = vec![body_collider(bar), body_collider(ear)];
-        let (mut world, seams, seam_k) = garment_world(&pattern, bodies, &settings).unwrap();
+        let GarmentWorld {
+            mut world,
+            seams,
+            seam_k,
+            ..
+        } = garment_world(&pattern, bodies, &settings).unwrap();
         world.self_contact.as_mut().unwrap().tips_on = tips;
-        sew(&mut world, &seams, &settings, &|_| {}, None).unwrap();
+        sew(&mut world, &seams, None, &settings, &|_| {}, None).unwrap();
         settle(&mut world, &seams, seam_k, &settings, None).unwrap();
         let inside = vec![false; world.state.x.len()];
         let whole = measures(&world, &seams, &inside).pop().unwrap();
@@ -320,10 +329,14 @@ fn a_drape_at_rest_reports_the_rest_it_measured() {
     // With the fabric's air damping (0.5/s) and the solver's, the hanging panels' slow swing
     // (a pendulum of about 30 cm) takes 11 s to fall under the rest test's 0.3 mm a frame.
     settings.settle_max = 20.0;
-    let (mut world, seams, seam_k) =
-        garment_world(&pattern, vec![body_collider(shoulder_bar().0)], &settings).unwrap();
+    let GarmentWorld {
+        mut world,
+        seams,
+        seam_k,
+        ..
+    } = garment_world(&pattern, vec![body_collider(shoulder_bar().0)], &settings).unwrap();
     assert!(
-        sew(&mut world, &seams, &settings, &|_| {}, None)
+        sew(&mut world, &seams, None, &settings, &|_| {}, None)
             .unwrap()
             .done
     );
@@ -349,9 +362,10 @@ fn sewing_gives_the_same_bits_with_one_or_two_threads() {
             .build()
             .unwrap();
         pool.install(|| {
-            let (mut world, seams, _) =
-                garment_world(&pattern, vec![body_collider(bar)], &settings).unwrap();
-            sew(&mut world, &seams, &settings, &|_| {}, None).unwrap();
+            let GarmentWorld {
+                mut world, seams, ..
+            } = garment_world(&pattern, vec![body_collider(bar)], &settings).unwrap();
+            sew(&mut world, &seams, None, &settings, &|_| {}, None).unwrap();
             let candidates = world.self_contact.as_ref().unwrap().totals.candidates;
             (world.state.x, candidates)
         })
@@ -369,9 +383,19 @@ fn sewing_gives_the_same_bits_with_one_or_two_threads() {
 /// `column.obj`) at 2 cm, 0.1 s of drape, `--json` and `extra`, into `out` of the returned
 /// folder: the folder, the report, and stderr.
 fn tube_on(body: &TriMesh, extra: &[&str]) -> (tempfile::TempDir, serde_json::Value, String) {
+    pattern_on(&tube(), body, &[&["--settle-max", "0.1"], extra].concat())
+}
+
+/// `garment` with `pattern` (JSON text) on `body` at 2 cm, and `extra`: the folder, the JSON
+/// report and stderr.
+fn pattern_on(
+    pattern_text: &str,
+    body: &TriMesh,
+    extra: &[&str],
+) -> (tempfile::TempDir, serde_json::Value, String) {
     let dir = tempfile::tempdir().unwrap();
     let pattern = dir.path().join("tube_specification.json");
-    std::fs::write(&pattern, tube()).unwrap();
+    std::fs::write(&pattern, pattern_text).unwrap();
     let body_path = dir.path().join("column.obj");
     common::write_y_up_obj(body, &body_path);
     let out = dir.path().join("out");
@@ -384,8 +408,6 @@ fn tube_on(body: &TriMesh, extra: &[&str]) -> (tempfile::TempDir, serde_json::Va
         out.to_str().unwrap(),
         "--spacing",
         "0.02",
-        "--settle-max",
-        "0.1",
         "--json",
     ];
     args.extend_from_slice(extra);
@@ -394,6 +416,105 @@ fn tube_on(body: &TriMesh, extra: &[&str]) -> (tempfile::TempDir, serde_json::Va
     assert!(o.status.success(), "{stderr}");
     let r: serde_json::Value = serde_json::from_str(&stdout).unwrap();
     (dir, r, stderr)
+}
+
+/// The tube with both top edges labelled as a waist (GarmentCode's `lower_interface`).
+fn waisted_tube() -> String {
+    let top = r#"{"endpoints": [2, 3]}"#;
+    let t = tube();
+    assert_eq!(t.matches(top).count(), 2);
+    t.replace(top, r#"{"endpoints": [2, 3], "label": "lower_interface"}"#)
+}
+
+/// The mean height (y, the output's up) of the garment's particles within 1 cm of the top
+/// edge's flat-pattern row (`vt` v = 0.4 m), from the garment OBJ in `dir`.
+fn top_row_height(dir: &Path) -> f64 {
+    let obj = std::fs::read_to_string(dir.join("out/tube.obj")).unwrap();
+    let v: Vec<[f64; 3]> = obj
+        .lines()
+        .filter_map(|l| l.strip_prefix("v "))
+        .map(|l| {
+            let n: Vec<f64> = l.split_whitespace().map(|x| x.parse().unwrap()).collect();
+            [n[0], n[1], n[2]]
+        })
+        .collect();
+    let vt: Vec<f64> = obj
+        .lines()
+        .filter_map(|l| l.strip_prefix("vt "))
+        .map(|l| l.split_whitespace().nth(1).unwrap().parse().unwrap())
+        .collect();
+    assert_eq!(v.len(), vt.len());
+    let top: Vec<f64> = (0..v.len())
+        .filter(|&i| vt[i] > 0.39)
+        .map(|i| v[i][1])
+        .collect();
+    assert!(top.len() >= 60, "{}", top.len());
+    top.iter().sum::<f64>() / top.len() as f64
+}
+
+#[test]
+fn a_held_waist_is_pulled_to_its_level_while_sewing_and_only_when_asked() {
+    // A frustum widening upwards (radius 0.17 m at 0.5 m to 0.20 m at 1.5 m): its narrowest
+    // section in the band 55% to 72% of its height is the band's bottom, 1.05 m. The tube
+    // (0.8 to 1.2 m) has its top edges labelled as a waist.
+    let body = common::frustum(0.17, 0.20, 0.5, 1.5, 48);
+    // One step of drape (0.01 s: a free fall of 0.5 mm) after sewing.
+    let one = ["--settle-max", "0.01"];
+    let (dir, r, _) = pattern_on(
+        &waisted_tube(),
+        &body,
+        &[&one[..], &["--hold-waist", "auto"]].concat(),
+    );
+    let h = &r["held_waist"];
+    // Two top edges of 60 cm at 2 cm: 31 particles each.
+    assert_eq!(h["particles"].as_u64(), Some(62), "{h}");
+    let level = h["level"].as_f64().unwrap();
+    assert!((level - 1.05).abs() < 1e-9, "{h}");
+    // The frustum's 48-gon there: radius 0.1865 m, girth 96 r sin(pi / 48).
+    let girth = 96.0 * 0.1865 * (std::f64::consts::PI / 48.0).sin();
+    assert!((h["girth"].as_f64().unwrap() - girth).abs() < 1e-9, "{h}");
+    assert!((h["from"].as_f64().unwrap() - 1.2).abs() < 1e-9, "{h}");
+    let to = h["to"].as_f64().unwrap();
+    assert!((to - level).abs() <= 0.005, "within HOLD_REACHED: {h}");
+    assert!(r["sew"]["done"].as_bool().unwrap(), "{}", r["sew"]);
+    // The garment written: its top row there.
+    let top = top_row_height(dir.path());
+    assert!((top - level).abs() < 0.006, "{top} {level}");
+    // A height of one's own, in metres.
+    let (_d, r, _) = pattern_on(
+        &waisted_tube(),
+        &body,
+        &[&one[..], &["--hold-waist", "0.95"]].concat(),
+    );
+    assert!((r["held_waist"]["to"].as_f64().unwrap() - 0.95).abs() <= 0.005);
+    assert!(r["held_waist"]["girth"].is_null());
+    // Not asked (the default): not held, the top stays where the pattern puts it.
+    let (dir, r, _) = pattern_on(&waisted_tube(), &body, &one);
+    assert!(r["held_waist"].is_null(), "{}", r["held_waist"]);
+    // (Sewing moves the cloth a little as the seams close: within 2 cm of 1.2 m, 15 cm above
+    // the level a hold would have pulled it to.)
+    let top = top_row_height(dir.path());
+    assert!((top - 1.2).abs() < 0.02, "{top}");
+}
+
+#[test]
+fn a_bad_hold_waist_is_refused_by_name() {
+    let o = common::run(&[
+        "garment",
+        "p.json",
+        "--body",
+        "b.obj",
+        "-o",
+        "out",
+        "--hold-waist",
+        "waist",
+    ]);
+    let (_, stderr) = common::text(&o);
+    assert!(!o.status.success());
+    assert!(
+        stderr.contains("--hold-waist waist: expected off, auto or a height in metres"),
+        "{stderr}"
+    );
 }
 
 #[test]
@@ -961,7 +1082,7 @@ fn measurements_to_a_fitted_form_to_dress_pencil_on_it() {
     let pattern = drapekit::garment::read(&pattern_path).unwrap();
     let mut settings = GarmentSettings::default();
     settings.assemble.spacing = 0.03;
-    let (world, _, _) =
+    let GarmentWorld { world, .. } =
         garment_world(&pattern, vec![body_collider(form.clone())], &settings).unwrap();
     let c = &world.colliders[0];
     assert!(c.closed);

@@ -342,6 +342,16 @@ fn bad_garment_keys_are_refused_by_key_before_work() {
             "0 or more",
         ),
         ("rotation = nan", "key 'garment.rotation'", "finite angle"),
+        (
+            "hold_waist = \"hips\"",
+            "key 'garment.hold_waist'",
+            "expected \"off\", \"auto\" or a height",
+        ),
+        (
+            "hold_waist = inf",
+            "key 'garment.hold_waist'",
+            "must be a finite height",
+        ),
         ("size = 40", "unknown field `size`", "expected one of"),
     ];
     for (line, key, what) in cases {

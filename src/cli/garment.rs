@@ -79,6 +79,24 @@ pub struct GarmentArgs {
     /// Also write `OUT_DIR/<garment>.png`: the garment on the body, from the front.
     #[arg(long)]
     pub preview: bool,
+    /// Hold the edges the pattern labels `lower_interface` (a skirt's or trousers' top) while
+    /// sewing: `off`, `auto` (at the body's natural waist: its narrowest torso girth between
+    /// 55% and 72% of its height) or a height in metres in the pattern's frame (y up)
+    #[arg(long, default_value = "off", value_name = "off|auto|M")]
+    pub hold_waist: String,
+}
+
+/// `--hold-waist`'s value.
+pub(super) fn hold_waist(value: &str) -> anyhow::Result<crate::garment::drape::WaistHold> {
+    use crate::garment::drape::WaistHold;
+    match value {
+        "off" => Ok(WaistHold::Off),
+        "auto" => Ok(WaistHold::Auto),
+        v => match v.parse::<f64>() {
+            Ok(z) if z.is_finite() => Ok(WaistHold::Level(z)),
+            _ => bail!("--hold-waist {v}: expected off, auto or a height in metres"),
+        },
+    }
 }
 
 /// Refuses a stage's longest simulated time (`--sew-max`, `--settle-max`) that is not
@@ -139,6 +157,9 @@ pub struct GarmentOutcome {
     /// The body's tips found through the cloth, and corrected, over both stages
     /// (`collide::body_points`; `null`: off, with cloth against cloth).
     pub tips: Option<crate::collide::body_points::Pushed>,
+    /// The waist held while sewing (`--hold-waist`; `null`: not held): heights above the
+    /// floor and the girth, m.
+    pub held_waist: Option<gd::HoldReport>,
     /// Stage 1.
     pub sew: StageReport,
     /// The stitches sewing left open (wider than its 1 mm goal), widest first, as
@@ -208,6 +229,7 @@ pub(super) fn outcome(
         failed,
         spots,
         spots_left_out,
+        held_waist: g.hold,
         sew: g.sew,
         sew_open_seams: in_mesh(g.sew_open, to_mesh),
         drape: g.drape,
@@ -304,6 +326,7 @@ pub(super) fn settings(args: &GarmentArgs) -> anyhow::Result<GarmentSettings> {
     s.sew_max = args.sew_max;
     s.settle_max = args.settle_max;
     s.body_clearance = args.body_clearance;
+    s.hold_waist = hold_waist(&args.hold_waist)?;
     s.self_collision = (!args.no_self_collision).then(|| SelfCollisionOptions {
         friction: args.cloth_friction,
         ..SelfCollisionOptions::default()
@@ -735,6 +758,15 @@ pub(super) fn print_outcome(r: &GarmentOutcome, wall_seconds: f64) {
         r.sew.seam_gap_max * 1e3,
         r.sew.sew_weight
     );
+    if let Some(h) = &r.held_waist {
+        let body = h.girth.map_or(String::new(), |c| {
+            format!(", the body's natural waist, {:.1} cm round", c * 100.0)
+        });
+        println!(
+            "    waist held: {} particles pulled from {:.3} to {:.3} m up (level {:.3} m{body})",
+            h.particles, h.from, h.to, h.level
+        );
+    }
     for o in r.sew_open_seams.iter().take(3) {
         println!(
             "    left open: stitch {} ({} to {}), {:.1} mm, {:.2} m up",

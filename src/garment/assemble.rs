@@ -110,6 +110,9 @@ pub struct Assembled {
     pub seam_k: f64,
     /// Bending elements across the seams.
     pub seam_bends: Vec<Bend>,
+    /// The particles of the edges labelled `waist::WAIST_LABEL` (a skirt's or trousers' top),
+    /// held at the body's waist while sewing; sorted, each once.
+    pub waist: Vec<u32>,
 }
 
 /// What stops a pattern from becoming cloth.
@@ -200,12 +203,41 @@ pub fn assemble(
         }
     }
     let seam_k = SEAM_STIFFNESS * opts.fabric.stretch[0].max(opts.fabric.stretch[1]);
+    let waist = labelled(
+        pattern,
+        &sampled,
+        &outline_particle,
+        super::waist::WAIST_LABEL,
+    );
     Ok(Assembled {
         pieces,
         seams,
         seam_k,
         seam_bends,
+        waist,
     })
+}
+
+/// The particles of every edge labelled `label`, sorted, each once.
+fn labelled(
+    pattern: &Pattern,
+    sampled: &[super::sample::SampledPanel],
+    outline_particle: &[Vec<u32>],
+    label: &str,
+) -> Vec<u32> {
+    let mut out = Vec::new();
+    for (k, panel) in pattern.panels.iter().enumerate() {
+        let (s, n) = (&sampled[k], sampled[k].points.len());
+        for (e, l) in panel.labels.iter().enumerate() {
+            if l.as_deref() == Some(label) {
+                let first = s.edge_start[e];
+                out.extend((0..=s.segments[e]).map(|j| outline_particle[k][(first + j) % n]));
+            }
+        }
+    }
+    out.sort_unstable();
+    out.dedup();
+    out
 }
 
 /// The first model particle of panel `k`.

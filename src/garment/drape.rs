@@ -61,6 +61,14 @@ pub const REST_FRACTION: f64 = 0.015;
 /// Frames in a row that must be at rest (see [`REST_FRACTION`]).
 pub const REST_FRAMES: u32 = 5;
 
+/// A held waist has reached its level when its particles are on average this close to it, m.
+pub const HOLD_REACHED: f64 = 0.005;
+
+/// The farthest a held particle is pulled towards its level in one step's force, m: the
+/// waist rises in quasi-static steps (a skirt already sewn round the hips, pulled its whole
+/// 19 cm up at once, gained energy from the body's contacts and stopped the run).
+pub const HOLD_STEP: f64 = 0.01;
+
 /// The sewing seams' weight relative to the mean particle's `m / h^2` (module notes).
 pub const SEW_WEIGHT: f64 = 1.0;
 
@@ -125,6 +133,48 @@ pub struct GarmentSettings {
     /// Cloth against cloth (default on, with `SelfCollisionOptions::default()`); `None` turns
     /// it off (faster; panels may then pass through each other).
     pub self_collision: Option<SelfCollisionOptions>,
+    /// Where the edges labelled `lower_interface` (a skirt's or trousers' top) are held while
+    /// sewing (`waist`); default [`WaistHold::Off`] (see the README's measurements).
+    pub hold_waist: WaistHold,
+}
+
+/// Where a garment's waist edges are held while sewing (`waist`).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum WaistHold {
+    /// At the first body's natural waist (`waist::natural_waist`), when the pattern labels
+    /// waist edges.
+    Auto,
+    /// Not held.
+    #[default]
+    Off,
+    /// At this height in the simulation's frame (z up; metres for the `garment` command).
+    Level(f64),
+}
+
+/// A waist held while sewing: its particles and the height they are pulled to.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Hold {
+    /// The held particles (the edges labelled `waist::WAIST_LABEL`).
+    pub particles: Vec<u32>,
+    /// The height, in the simulation's frame.
+    pub level: f64,
+    /// The body's girth there when the level is its natural waist (`WaistHold::Auto`).
+    pub girth: Option<f64>,
+}
+
+/// What a held waist did while sewing.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct HoldReport {
+    /// Held particles.
+    pub particles: usize,
+    /// The height they were pulled to, in the simulation's frame.
+    pub level: f64,
+    /// The body's natural-waist girth there, when the level was found on the body.
+    pub girth: Option<f64>,
+    /// Their mean height when sewing began and ended.
+    pub from: f64,
+    /// See `from`.
+    pub to: f64,
 }
 
 impl Default for GarmentSettings {
@@ -142,6 +192,7 @@ impl Default for GarmentSettings {
             check_every: 0.02,
             self_collision: Some(SelfCollisionOptions::default()),
             body_clearance: None,
+            hold_waist: WaistHold::Off,
         }
     }
 }
@@ -188,6 +239,11 @@ impl GarmentSettings {
         ] {
             if !(v.is_finite() && v >= 0.0) {
                 bad(field, v, "must be a number, 0 or more".into());
+            }
+        }
+        if let WaistHold::Level(z) = self.hold_waist {
+            if !z.is_finite() {
+                bad("hold_waist", z, "must be a finite height, m".into());
             }
         }
         for (field, t) in [("sew_max", self.sew_max), ("settle_max", self.settle_max)] {
@@ -238,6 +294,8 @@ pub struct Garment {
     pub world: World,
     /// The seam springs' ends.
     pub seams: Vec<SeamPair>,
+    /// The waist held while sewing, if any.
+    pub hold: Option<HoldReport>,
     /// Stage 1.
     pub sew: StageReport,
     /// The stitches still open wider than `seam_closed` when sewing ended (before the drape's
@@ -272,17 +330,30 @@ pub fn body_collider(body: TriMesh) -> Collider {
     Collider::new("body".into(), body, dims, 0.0, None)
 }
 
+/// A garment ready to sew (`garment_world`).
+#[derive(Debug)]
+pub struct GarmentWorld {
+    /// The cloth (gravity off) and the bodies.
+    pub world: World,
+    /// The seam springs' ends.
+    pub seams: Vec<SeamPair>,
+    /// The seams' full constant, N/m.
+    pub seam_k: f64,
+    /// The waist held while sewing, if any (`GarmentSettings::waist`).
+    pub hold: Option<Hold>,
+}
+
 /// The world of a garment on `bodies` (metres, z up; the first is the body the garment is
-/// sewn on: the panels' facing is judged against its vertical axis, and the seams' meeting
-/// points go round it; the others only collide): the pattern assembled with its seams,
-/// gravity off (sewing comes first); and the seams' full constant, N/m. Every body keeps the
+/// sewn on: the panels' facing is judged against its vertical axis, the seams' meeting
+/// points go round it and its natural waist holds the waist edges; the others only collide):
+/// the pattern assembled with its seams, gravity off (sewing comes first). Every body keeps the
 /// cloth its fabric's thickness and the body clearance off, and gets the garment's friction
 /// unless it has its own.
 pub fn garment_world(
     pattern: &Pattern,
     mut bodies: Vec<Collider>,
     settings: &GarmentSettings,
-) -> Result<(World, Vec<SeamPair>, f64), GarmentError> {
+) -> Result<GarmentWorld, GarmentError> {
     let Some(body) = bodies.first().filter(|b| !b.mesh.faces.is_empty()) else {
         return Err(GarmentError::EmptyBody);
     };
@@ -295,6 +366,7 @@ pub fn garment_world(
         return Err(GarmentError::FacingIn(facing));
     }
     let assembled = assemble(pattern, &settings.assemble).map_err(GarmentError::Assemble)?;
+    let hold = waist_hold(&assembled.waist, &body.mesh, settings.hold_waist);
     let (mut model, x) = ClothModel::assemble(&assembled.pieces, Vec3::zeros());
     model.add_springs(&seam_springs(&assembled));
     model.add_bends(&assembled.seam_bends);
@@ -312,7 +384,33 @@ pub fn garment_world(
         let pairs: Vec<[u32; 2]> = assembled.seams.iter().map(|s| [s.a, s.b]).collect();
         world.self_contact = Some(SelfContact::new(&world.model, &pairs, opts));
     }
-    Ok((world, assembled.seams, assembled.seam_k))
+    Ok(GarmentWorld {
+        world,
+        seams: assembled.seams,
+        seam_k: assembled.seam_k,
+        hold,
+    })
+}
+
+/// The hold of the waist `particles` on `body` by `how`: none when there are no such
+/// particles, when it is off, or when the body has no natural waist.
+fn waist_hold(particles: &[u32], body: &TriMesh, how: WaistHold) -> Option<Hold> {
+    if particles.is_empty() {
+        return None;
+    }
+    let (level, girth) = match how {
+        WaistHold::Off => return None,
+        WaistHold::Level(z) => (z, None),
+        WaistHold::Auto => {
+            let w = super::waist::natural_waist(body)?;
+            (w.level, Some(w.girth))
+        }
+    };
+    Some(Hold {
+        particles: particles.to_vec(),
+        level,
+        girth,
+    })
 }
 
 /// Sets the constant of every seam spring, N/m.
@@ -331,6 +429,7 @@ pub fn set_seam_k(model: &mut ClothModel, k: f64) {
 pub fn sew(
     world: &mut World,
     seams: &[SeamPair],
+    hold: Option<&Hold>,
     settings: &GarmentSettings,
     progress: &dyn Fn(f64),
     cancel: Option<&AtomicBool>,
@@ -352,8 +451,15 @@ pub fn sew(
     let gaps = seam_gaps(seams, &world.state.x);
     report.seam_gap_max = gaps.0;
     let mut history = vec![gaps];
-    while report.seam_gap_max > settings.seam_closed && report.time < settings.sew_max {
+    let held = |w: &World| hold.is_none_or(|h| held_off(h, &w.state.x) <= HOLD_REACHED);
+    while (report.seam_gap_max > settings.seam_closed || !held(world))
+        && report.time < settings.sew_max
+    {
+        world.model.external.clear();
         lift(world, seams, dt);
+        if let Some(h) = hold {
+            pull_waist(world, h, dt);
+        }
         let quiet = &mut |_: u64, _: &World| Ok(false);
         let stats = run_stage(world, settings, Stop::Steps(chunk), None, quiet, cancel)?;
         // Sewing is quasi-static: what the seams' pull gave the panels is taken away, so they
@@ -397,8 +503,63 @@ pub fn sew(
     for (c, f) in world.colliders.iter_mut().zip(friction) {
         c.friction = f;
     }
-    report.done = report.seam_gap_max <= settings.seam_closed;
+    report.done = report.seam_gap_max <= settings.seam_closed && held(world);
     Ok(report)
+}
+
+/// The held particles' mean vertical distance from their level.
+pub fn held_off(hold: &Hold, x: &[Point3]) -> f64 {
+    let sum: f64 = hold
+        .particles
+        .iter()
+        .map(|&i| (x[i as usize].z - hold.level).abs())
+        .sum();
+    sum / hold.particles.len().max(1) as f64
+}
+
+/// The held particles' mean height.
+pub fn held_mean(hold: &Hold, x: &[Point3]) -> f64 {
+    let sum: f64 = hold.particles.iter().map(|&i| x[i as usize].z).sum();
+    sum / hold.particles.len().max(1) as f64
+}
+
+/// Pulls the held particles vertically towards their level by [`LIFT_WEIGHT`] times each
+/// particle's `m / dt^2` times the distance, and their pieces as a whole by
+/// [`PIECE_LIFT_WEIGHT`] of the pieces' held particles' mean distance per step (a vertical
+/// translation: no strain), through `model.external` (the reference pipeline's vertical
+/// attachment, `waist`).
+fn pull_waist(world: &mut World, hold: &Hold, dt: f64) {
+    let n = world.model.len();
+    let x = &world.state.x;
+    let m = &mut world.model;
+    if m.external.is_empty() {
+        m.external.resize(n, Vec3::zeros());
+    }
+    let mut shift = vec![(0.0, 0usize); m.pieces.len()];
+    for &i in &hold.particles {
+        let i = i as usize;
+        let dz = (hold.level - x[i].z).clamp(-HOLD_STEP, HOLD_STEP);
+        m.external[i].z += dz * (LIFT_WEIGHT * m.mass[i] / (dt * dt));
+        if let Some(p) = piece_of(m, i) {
+            shift[p].0 += dz;
+            shift[p].1 += 1;
+        }
+    }
+    for (p, (d, c)) in m.pieces.iter().zip(shift) {
+        if c > 0 {
+            let a = d * (PIECE_LIFT_WEIGHT / c as f64 / (dt * dt));
+            for i in p.first..p.first + p.count {
+                m.external[i].z += a * m.mass[i];
+            }
+        }
+    }
+}
+
+/// The piece particle `i` belongs to.
+fn piece_of(m: &ClothModel, i: usize) -> Option<usize> {
+    m.pieces
+        .iter()
+        .position(|p| i >= p.first && i < p.first + p.count)
 }
 
 /// Pulls both sides of every seam whose straight path crosses the body towards their meeting
@@ -415,24 +576,20 @@ fn lift(world: &mut World, seams: &[SeamPair], dt: f64) {
         .map(|s| super::lift::meeting_point(body, &x[s.a as usize], &x[s.b as usize]))
         .collect();
     let m = &mut world.model;
-    m.external.clear();
     if points.iter().all(Option::is_none) {
         // No extra force: the step loop skips it.
         return;
     }
-    m.external.resize(n, Vec3::zeros());
+    if m.external.is_empty() {
+        m.external.resize(n, Vec3::zeros());
+    }
     // Per piece: the sum of its sides' displacements to their meeting points, and their count.
-    let piece_of = |i: usize| {
-        m.pieces
-            .iter()
-            .position(|p| i >= p.first && i < p.first + p.count)
-    };
     let mut shift = vec![(Vec3::zeros(), 0usize); m.pieces.len()];
     for (s, w) in seams.iter().zip(points) {
         if let Some(w) = w {
             for i in [s.a as usize, s.b as usize] {
                 m.external[i] += (w - x[i]) * (LIFT_WEIGHT * m.mass[i] / (dt * dt));
-                if let Some(p) = piece_of(i) {
+                if let Some(p) = piece_of(m, i) {
                     shift[p].0 += w - x[i];
                     shift[p].1 += 1;
                 }
@@ -535,14 +692,35 @@ pub fn sew_and_drape(
     progress: &dyn Fn(f64),
     cancel: Option<&AtomicBool>,
 ) -> Result<Garment, GarmentError> {
-    let (mut world, seams, seam_k) = garment_world(pattern, bodies, settings)?;
-    let sew_report = sew(&mut world, &seams, settings, progress, cancel)?;
+    let GarmentWorld {
+        mut world,
+        seams,
+        seam_k,
+        hold,
+    } = garment_world(pattern, bodies, settings)?;
+    let from = hold.as_ref().map(|h| held_mean(h, &world.state.x));
+    let sew_report = sew(
+        &mut world,
+        &seams,
+        hold.as_ref(),
+        settings,
+        progress,
+        cancel,
+    )?;
+    let hold = hold.zip(from).map(|(h, from)| HoldReport {
+        particles: h.particles.len(),
+        level: h.level,
+        girth: h.girth,
+        from,
+        to: held_mean(&h, &world.state.x),
+    });
     let limit_mm = settings.seam_closed * 1e3;
     let sew_open = super::measure::open_seams(pattern, &seams, &world.state.x, limit_mm);
     let drape = settle(&mut world, &seams, seam_k, settings, cancel)?;
     Ok(Garment {
         world,
         seams,
+        hold,
         sew: sew_report,
         sew_open,
         drape,

@@ -22,6 +22,7 @@ pub mod measure;
 pub mod sample;
 pub mod spec;
 pub mod spots;
+pub mod waist;
 
 pub use curve::Curve;
 pub use spec::{parse, read, Edge, EdgeRef, Panel, Pattern, Problem, SpecError, Stitch};

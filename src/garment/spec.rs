@@ -45,6 +45,9 @@ pub struct Panel {
     pub translation: Vec3,
     /// Euler angles (x, y, z) in degrees of the placement's rotation `R = Rz Ry Rx`.
     pub rotation_deg: [f64; 3],
+    /// Each edge's `label` in the file (`lower_interface`: a skirt's or trousers' top, held at
+    /// the body's waist while sewing, `waist`), `None` when it has none.
+    pub labels: Vec<Option<String>>,
 }
 
 /// One edge of a panel: vertex indices and curve.
@@ -314,6 +317,8 @@ struct RawEdge {
     endpoints: [usize; 2],
     #[serde(default)]
     curvature: Option<Value>,
+    #[serde(default)]
+    label: Option<String>,
 }
 
 #[derive(Deserialize)]
@@ -452,6 +457,7 @@ fn build_panel(name: &str, raw: RawPanel, relative: bool, problems: &mut Vec<Pro
         edges,
         translation: Vec3::from(raw.translation),
         rotation_deg: raw.rotation,
+        labels: raw.edges.iter().map(|e| e.label.clone()).collect(),
     };
     if problems.len() == before {
         check_arcs(&panel, problems);
@@ -1029,6 +1035,7 @@ mod tests {
             edges: vec![],
             translation: Vec3::new(0.0, 0.0, 10.0),
             rotation_deg: [0.0, 90.0, 0.0],
+            labels: vec![],
         };
         // About y by 90°: (1, 0, 0) -> (0, 0, -1).
         assert!((panel.place(Point2::new(1.0, 0.0)) - Point3::new(0.0, 0.0, 9.0)).norm() < 1e-12);
