@@ -477,6 +477,8 @@ fn a_held_waist_is_pulled_to_its_level_while_sewing_and_only_when_asked() {
     let to = h["to"].as_f64().unwrap();
     assert!((to - level).abs() <= 0.005, "within HOLD_REACHED: {h}");
     assert!(r["sew"]["done"].as_bool().unwrap(), "{}", r["sew"]);
+    assert!(!(r["assumed"].as_array().unwrap().iter())
+        .any(|a| a.as_str().unwrap().contains("not held")));
     // The garment written: its top row there.
     let top = top_row_height(dir.path());
     assert!((top - level).abs() < 0.006, "{top} {level}");
@@ -491,6 +493,12 @@ fn a_held_waist_is_pulled_to_its_level_while_sewing_and_only_when_asked() {
     // Not asked (the default): not held, the top stays where the pattern puts it.
     let (dir, r, _) = pattern_on(&waisted_tube(), &body, &one);
     assert!(r["held_waist"].is_null(), "{}", r["held_waist"]);
+    // The summary and report say the waist was not held, and how to hold it.
+    let said = |r: &serde_json::Value| {
+        (r["assumed"].as_array().unwrap().iter())
+            .any(|a| a.as_str().unwrap().starts_with("the pattern's 2 waist edges (labelled lower_interface) are not held while sewing (--hold-waist auto"))
+    };
+    assert!(said(&r), "{}", r["assumed"]);
     // (Sewing moves the cloth a little as the seams close: within 2 cm of 1.2 m, 15 cm above
     // the level a hold would have pulled it to.)
     let top = top_row_height(dir.path());

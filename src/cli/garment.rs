@@ -86,6 +86,14 @@ pub struct GarmentArgs {
     pub hold_waist: String,
 }
 
+/// The edges of `pattern` labelled as a waist (`garment::waist::WAIST_LABEL`).
+fn waist_edges(pattern: &Pattern) -> usize {
+    let label = Some(crate::garment::waist::WAIST_LABEL);
+    (pattern.panels.iter().flat_map(|p| &p.labels))
+        .filter(|l| l.as_deref() == label)
+        .count()
+}
+
 /// `--hold-waist`'s value.
 pub(super) fn hold_waist(value: &str) -> anyhow::Result<crate::garment::drape::WaistHold> {
     use crate::garment::drape::WaistHold;
@@ -657,6 +665,14 @@ pub fn run(args: GarmentArgs) -> anyhow::Result<()> {
         "the pattern is in units of 1/{} m (its units_in_meter)",
         pattern.units_in_meter
     ));
+    let waist_edges = waist_edges(&pattern);
+    if waist_edges > 0 && args.hold_waist == "off" {
+        assumed.push(format!(
+            "the pattern's {waist_edges} waist edges (labelled {}) are not held while sewing \
+             (--hold-waist auto holds them at the body's natural waist)",
+            crate::garment::waist::WAIST_LABEL
+        ));
+    }
     let report = GarmentReport {
         pattern: args.pattern.display().to_string(),
         body: args.body.display().to_string(),
