@@ -165,8 +165,8 @@ pub struct GarmentOutcome {
     /// The body's tips found through the cloth, and corrected, over both stages
     /// (`collide::body_points`; `null`: off, with cloth against cloth).
     pub tips: Option<crate::collide::body_points::Pushed>,
-    /// The waist held while sewing (`--hold-waist`; `null`: not held): heights above the
-    /// floor and the girth, m.
+    /// The waist held while sewing (`--hold-waist`; `null`: not held): heights (the
+    /// simulation's z, m: above the floor for the `garment` command) and the girth, m.
     pub held_waist: Option<gd::HoldReport>,
     /// Stage 1.
     pub sew: StageReport,

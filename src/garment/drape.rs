@@ -13,7 +13,9 @@
 //! `sew_max`, the seams pull twice as hard (up to [`SEW_WEIGHT_MAX`]): the gaps are
 //! small by then, and a strong pull over a small gap moves the rows little. Stage 1 ends when
 //! every seam gap is at most `seam_closed`, when the gaps close that slowly at the strongest
-//! pull, or at `sew_max`.
+//! pull, or at `sew_max`. With `hold_waist`, the edges a pattern labels as a waist are pulled
+//! up or down to a level (the body's natural waist, `waist`) while sewing, as the reference
+//! pipeline's attachment does, and sewing also waits until they are within [`HOLD_REACHED`].
 //! **Stage 2, drape**: gravity on, friction back, the seams at their full constant (stiff
 //! springs of rest length 0, `SEAM_STIFFNESS`), which closes what sewing left; it ends
 //! when the cloth is at rest (at most [`REST_FRACTION`] of the particles moving faster than
@@ -339,7 +341,7 @@ pub struct GarmentWorld {
     pub seams: Vec<SeamPair>,
     /// The seams' full constant, N/m.
     pub seam_k: f64,
-    /// The waist held while sewing, if any (`GarmentSettings::waist`).
+    /// The waist held while sewing, if any (`GarmentSettings::hold_waist`).
     pub hold: Option<Hold>,
 }
 
