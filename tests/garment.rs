@@ -506,6 +506,31 @@ fn a_held_waist_is_pulled_to_its_level_while_sewing_and_only_when_asked() {
 }
 
 #[test]
+fn edge_labels_are_read_and_their_particles_listed_as_the_waist() {
+    let pattern = parse(&waisted_tube(), Path::new("tube.json")).unwrap();
+    for panel in &pattern.panels {
+        let labels: Vec<Option<&str>> = panel.labels.iter().map(|l| l.as_deref()).collect();
+        assert_eq!(labels, [None, None, Some("lower_interface"), None]);
+    }
+    let opts = AssembleOptions {
+        spacing: 0.02,
+        ..AssembleOptions::default()
+    };
+    let a = assemble(&pattern, &opts).unwrap();
+    // Both top edges, 31 samples each, at the top (z = 1.2 m), each particle once.
+    let x: Vec<Point3> = a.pieces.iter().flat_map(|p| p.3.clone()).collect();
+    assert_eq!(a.waist.len(), 62);
+    assert!(a.waist.windows(2).all(|w| w[0] < w[1]));
+    assert!(a
+        .waist
+        .iter()
+        .all(|&i| (x[i as usize].z - 1.2).abs() < 1e-12));
+    // Without labels, no waist.
+    let plain = parse(&tube(), Path::new("tube.json")).unwrap();
+    assert!(assemble(&plain, &opts).unwrap().waist.is_empty());
+}
+
+#[test]
 fn a_bad_hold_waist_is_refused_by_name() {
     let o = common::run(&[
         "garment",
