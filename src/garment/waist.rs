@@ -22,7 +22,8 @@ use crate::mesh::TriMesh;
 pub const WAIST_LABEL: &str = "lower_interface";
 
 /// Where the natural waist is looked for, as fractions of the body's height above its lowest
-/// point (GarmentCode's `mean_all`: 0.633; ISO 8559's shape model: 0.631).
+/// point (GarmentCode's `mean_all`: 0.633; ISO 8559's shape model: 0.631): a whole standing
+/// body's (on a torso alone, such as a dress form, the band falls elsewhere: give the level).
 pub const BAND: (f64, f64) = (0.55, 0.72);
 
 /// Spacing of the sections, as a fraction of the body's height (1.7 mm on a 1.72 m body).
