@@ -538,6 +538,51 @@ fn edge_labels_are_read_and_their_particles_listed_as_the_waist() {
 }
 
 #[test]
+fn bench_garment_holds_dress_pencils_waist_at_mean_alls_natural_waist() {
+    // `bench garment --hold-waist auto` at 10 cm, 0.05 s of drape: the skirt's waist edges are
+    // held at the body's natural waist, between its hips and its chest (GarmentCode's own
+    // waist level for mean_all, height - head_l - waist_line, is 1.088 m).
+    let Some(root) = common::realdata() else {
+        return;
+    };
+    let o = common::run(&[
+        "bench",
+        "garment",
+        "--realdata",
+        root.to_str().unwrap(),
+        "--only",
+        "dress_pencil",
+        "--spacing",
+        "0.1",
+        "--settle-max",
+        "0.05",
+        "--hold-waist",
+        "auto",
+        "--json",
+    ]);
+    let (stdout, stderr) = common::text(&o);
+    assert!(o.status.success(), "{stderr}");
+    let rows: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    let rows = rows.as_array().unwrap();
+    assert_eq!(rows.len(), 2, "mean_all and mean_female");
+    for r in rows {
+        let h = &r["held_waist"];
+        assert!(h["particles"].as_u64().unwrap() > 0, "{h}");
+        let (level, girth) = (h["level"].as_f64().unwrap(), h["girth"].as_f64().unwrap());
+        match r["body"].as_str().unwrap() {
+            "mean_all" => assert!(
+                (level - 1.088).abs() < 0.04 && (girth - 0.843).abs() < 0.01,
+                "{h}"
+            ),
+            _ => assert!(
+                (level - 1.049).abs() < 0.04 && (girth - 0.803).abs() < 0.01,
+                "{h}"
+            ),
+        }
+    }
+}
+
+#[test]
 fn a_bad_hold_waist_is_refused_by_name() {
     let o = common::run(&[
         "garment",
@@ -553,6 +598,12 @@ fn a_bad_hold_waist_is_refused_by_name() {
     assert!(!o.status.success());
     assert!(
         stderr.contains("--hold-waist waist: expected off, auto or a height in metres"),
+        "{stderr}"
+    );
+    let o = common::run(&["bench", "garment", "--hold-waist", "waist"]);
+    let (_, stderr) = common::text(&o);
+    assert!(
+        !o.status.success() && stderr.contains("--hold-waist waist: expected"),
         "{stderr}"
     );
 }

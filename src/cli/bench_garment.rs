@@ -38,6 +38,9 @@ pub struct GarmentBench {
     /// Print the results as JSON.
     #[arg(long)]
     pub json: bool,
+    /// Hold the patterns' waist edges while sewing, as `garment --hold-waist`.
+    #[arg(long, default_value = "off", value_name = "off|auto|M")]
+    pub hold_waist: String,
 }
 
 /// The runs: (pattern, body).
@@ -73,6 +76,8 @@ pub struct GarmentRow {
     /// `pass` or `fail`, and what failed.
     pub verdict: String,
     pub failed: Vec<String>,
+    /// The waist held while sewing (`--hold-waist`), or `null`.
+    pub held_waist: Option<gd::HoldReport>,
 }
 
 /// Runs the benchmark.
@@ -87,6 +92,7 @@ pub fn run(a: GarmentBench) -> anyhow::Result<()> {
     settings.assemble.spacing = a.spacing;
     settings.assemble.fabric = fabric;
     settings.settle_max = a.settle_max;
+    settings.hold_waist = super::garment::hold_waist(&a.hold_waist)?;
     let keep = |p: &str, b: &str| {
         a.only
             .as_ref()
@@ -119,6 +125,7 @@ pub fn run(a: GarmentBench) -> anyhow::Result<()> {
             wall_seconds: t.elapsed().as_secs_f64(),
             verdict: if j.failed.is_empty() { "pass" } else { "fail" }.into(),
             failed: j.failed,
+            held_waist: g.hold,
         };
         if !a.json {
             print_row(&row);
@@ -148,6 +155,10 @@ fn print_row(r: &GarmentRow) {
         r.wall_seconds,
         r.verdict
     );
+    if let Some(h) = &r.held_waist {
+        let (n, from, to, level) = (h.particles, h.from, h.to, h.level);
+        println!("    waist held: {n} particles from {from:.3} to {to:.3} m (level {level:.3} m)");
+    }
     for f in &r.failed {
         println!("    {f}");
     }
