@@ -80,8 +80,9 @@ pub struct GarmentArgs {
     #[arg(long)]
     pub preview: bool,
     /// Hold the edges the pattern labels `lower_interface` (a skirt's or trousers' top) while
-    /// sewing: `off`, `auto` (at the body's natural waist: its narrowest torso girth between
-    /// 55% and 72% of its height) or a height in metres in the pattern's frame (y up)
+    /// sewing: `off`, `auto` (at the body's natural waist: the torso section deepest between
+    /// wider ones, 35% to 80% of its height up) or a height in metres in the pattern's frame
+    /// (y up)
     #[arg(long, default_value = "off", value_name = "off|auto|M")]
     pub hold_waist: String,
 }
