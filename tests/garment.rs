@@ -584,13 +584,20 @@ fn bench_garment_holds_dress_pencils_waist_at_mean_alls_natural_waist() {
 
 #[test]
 fn a_bad_hold_waist_is_refused_by_name() {
+    // Real inputs: the refusal comes before any work, and nothing is written.
+    let dir = tempfile::tempdir().unwrap();
+    let pattern = dir.path().join("tube_specification.json");
+    std::fs::write(&pattern, waisted_tube()).unwrap();
+    let body = dir.path().join("column.obj");
+    common::write_y_up_obj(&common::cylinder(0.186, 0.5, 1.5, 48), &body);
+    let out = dir.path().join("out");
     let o = common::run(&[
         "garment",
-        "p.json",
+        pattern.to_str().unwrap(),
         "--body",
-        "b.obj",
+        body.to_str().unwrap(),
         "-o",
-        "out",
+        out.to_str().unwrap(),
         "--hold-waist",
         "waist",
     ]);
@@ -600,6 +607,7 @@ fn a_bad_hold_waist_is_refused_by_name() {
         stderr.contains("--hold-waist waist: expected off, auto or a height in metres"),
         "{stderr}"
     );
+    assert!(!out.exists(), "nothing written");
     let o = common::run(&["bench", "garment", "--hold-waist", "waist"]);
     let (_, stderr) = common::text(&o);
     assert!(

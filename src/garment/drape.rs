@@ -537,21 +537,28 @@ fn pull_waist(world: &mut World, hold: &Hold, dt: f64) {
     if m.external.is_empty() {
         m.external.resize(n, Vec3::zeros());
     }
-    let mut shift = vec![(0.0, 0usize); m.pieces.len()];
+    let mut shift = vec![(Vec3::zeros(), 0usize); m.pieces.len()];
     for &i in &hold.particles {
         let i = i as usize;
         let dz = (hold.level - x[i].z).clamp(-HOLD_STEP, HOLD_STEP);
         m.external[i].z += dz * (LIFT_WEIGHT * m.mass[i] / (dt * dt));
         if let Some(p) = piece_of(m, i) {
-            shift[p].0 += dz;
+            shift[p].0.z += dz;
             shift[p].1 += 1;
         }
     }
-    for (p, (d, c)) in m.pieces.iter().zip(shift) {
+    follow(m, &shift, dt);
+}
+
+/// Each piece with pulled particles follows them as a whole: a uniform acceleration that moves
+/// it by [`PIECE_LIFT_WEIGHT`] of their mean displacement per step (no strain). `shift[p]` is
+/// piece `p`'s sum of displacements and their count.
+fn follow(m: &mut ClothModel, shift: &[(Vec3, usize)], dt: f64) {
+    for (p, &(d, c)) in m.pieces.iter().zip(shift) {
         if c > 0 {
             let a = d * (PIECE_LIFT_WEIGHT / c as f64 / (dt * dt));
             for i in p.first..p.first + p.count {
-                m.external[i].z += a * m.mass[i];
+                m.external[i] += a * m.mass[i];
             }
         }
     }
@@ -598,16 +605,8 @@ fn lift(world: &mut World, seams: &[SeamPair], dt: f64) {
             }
         }
     }
-    // The whole piece follows its sides: a uniform acceleration that moves it by
-    // PIECE_LIFT_WEIGHT of its sides' mean displacement per step (no strain).
-    for (p, (d, c)) in m.pieces.iter().zip(shift) {
-        if c > 0 {
-            let a = d * (PIECE_LIFT_WEIGHT / c as f64 / (dt * dt));
-            for i in p.first..p.first + p.count {
-                m.external[i] += a * m.mass[i];
-            }
-        }
-    }
+    // The whole piece follows its sides.
+    follow(m, &shift, dt);
 }
 
 /// Stage 2: gravity on, until at rest or `settle_max`.
