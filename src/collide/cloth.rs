@@ -112,9 +112,10 @@
 //! outside every triangle), nor a fold inside a particle's star (a triangle folded flat over
 //! its neighbour: the first crossings `hoody_mean` makes while sewing, README). A particle that
 //! moves through the cloth by more than [`DETECT`] contact distances in one step is not found
-//! (it is then on the far side for good; the crossing counts report it), and the side is taken from the old positions, so a step that moves a
-//! particle around the rim of a triangle can be read as a pass through it. There is no
-//! continuous (time-of-impact) test and no fail-safe (impact zones). A few Jacobi iterations do
+//! (it is then on the far side for good; the crossing counts report it), and the side is
+//! taken from the old positions, so a step that moves a particle around the rim of a triangle
+//! can be read as a pass through it. There is no continuous (time-of-impact) test and no
+//! fail-safe (impact zones; one was measured, README). A few Jacobi iterations do
 //! not separate a deep stack at once: `SelfStats::remaining` says what is left for the next step.
 
 use crate::collide::Collider;
