@@ -4,9 +4,9 @@
 //! - [`plan`] reads the plan; each job's id is its axis values' names joined by `.`, so adding a
 //!   value keeps every id. [`order`] keeps positions (`--index`) stable in an output folder.
 //! - [`run`] runs the jobs: `workers` at once, each with `max(1, cores / workers)` threads, each
-//!   as a child process of the drapekit binary ([`job`]), its scene derived by [`derive`], its
-//!   body fitted or scaled once by [`body`]; [`status`] records each job atomically, so a rerun
-//!   skips done jobs and retries the rest.
+//!   as a child process of the drapekit binary ([`job`]), its scene derived by
+//!   [`derive`](mod@derive), its body fitted or scaled once by [`body`]; [`status`] records
+//!   each job atomically, so a rerun skips done jobs and retries the rest.
 //! - [`collect`] makes the table; [`slurm`] writes the `sbatch` array script.
 //!
 //! Layout of an output folder `OUT`: `order.json` (positions), `bodies/` (fitted and scaled

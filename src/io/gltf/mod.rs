@@ -13,8 +13,8 @@
 //!
 //! **Writing** ([`write_scene`], [`Scene`]): named parts with area-weighted vertex normals
 //! ([`vertex_normals`]), optional per-vertex colours, and optional frames played by a `STEP`
-//! scale animation (see [`write`]). A single mesh is written by `io::write_mesh` as a scene of
-//! one part.
+//! scale animation (see [`write`](mod@write)). A single mesh is written by `io::write_mesh` as a
+//! scene of one part.
 //!
 //! The JSON structures are the `gltf-json` crate's (the glTF-rs project's): it parses and
 //! serialises the whole schema; the binary container, the buffers and the accessors' bytes are
