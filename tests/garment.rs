@@ -129,6 +129,32 @@ fn shoulder_world() -> (
 }
 
 #[test]
+fn the_tips_pass_keeps_its_own_time_apart_from_the_self_pass() {
+    let (_, _, mut world, _) = shoulder_world();
+    let reach = vec![true; world.colliders.len()];
+    let drapekit::sim::World {
+        model,
+        state,
+        colliders,
+        self_contact,
+        ..
+    } = &mut world;
+    let sc = self_contact
+        .as_mut()
+        .expect("a garment has cloth against cloth");
+    assert_eq!((sc.totals.seconds, sc.tips_seconds), (0.0, 0.0));
+    sc.push_tips(model, colliders, &reach, &mut state.x, &mut state.v);
+    // The pass ran (its hash rebuilt over both panels), and its time is its own.
+    assert!(sc.tips_seconds > 0.0);
+    assert_eq!(sc.totals.seconds, 0.0);
+    // Off, it neither runs nor counts.
+    let before = sc.tips_seconds;
+    sc.tips_on = false;
+    sc.push_tips(model, colliders, &reach, &mut state.x, &mut state.v);
+    assert_eq!(sc.tips_seconds, before);
+}
+
+#[test]
 fn a_seam_across_a_bar_is_sewn_over_it_not_through_it() {
     let (_, settings, mut world, seams) = shoulder_world();
     let (_, r, zc) = shoulder_bar();
@@ -669,8 +695,13 @@ fn the_garment_command_reports_a_tube_on_a_cylinder() {
     assert_eq!(r["spots_left_out"], 0);
     assert!(r["body_closed"].as_bool().unwrap());
     assert!(r["self_contact"]["candidates"].is_u64());
-    // The tips pass ran (a smooth column pokes through nothing).
+    // The tips pass ran (a smooth column pokes through nothing), and the two passes' times
+    // are apart, each within the run's.
     assert_eq!(r["tips"]["corrected"], 0, "{}", r["tips"]);
+    let secs = |k: &str| r[k]["seconds"].as_f64().unwrap();
+    assert!(secs("tips") > 0.0 && secs("self_contact") > 0.0, "{r}");
+    let wall = r["wall_seconds"].as_f64().unwrap();
+    assert!(secs("tips") + secs("self_contact") < wall, "{r}");
     // The fit check, before the drape: the tube's two open ends, 1.2 m round a column they
     // fit, and no warning.
     let fit = &r["fit_check"];

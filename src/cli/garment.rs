@@ -151,6 +151,17 @@ pub struct GarmentReport {
     pub wall_seconds: f64,
 }
 
+/// The tips pass of a garment's run (`collide::body_points`): what it found and corrected, and
+/// its wall time.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct TipsReport {
+    /// Tips found through a triangle, and corrected.
+    #[serde(flatten)]
+    pub pushed: crate::collide::body_points::Pushed,
+    /// Wall time of the pass over both stages, s (not in `self_contact.seconds`).
+    pub seconds: f64,
+}
+
 /// A sewn and draped garment as both `drapekit garment` and a scene's `[[garment]]` report it.
 #[derive(Debug, Serialize)]
 pub struct GarmentOutcome {
@@ -160,12 +171,12 @@ pub struct GarmentOutcome {
     pub triangles: usize,
     /// Seam springs.
     pub seam_springs: usize,
-    /// Cloth-against-cloth contact over both stages (`null`: off; its `seconds` include the
-    /// tips pass).
+    /// Cloth-against-cloth contact over both stages (`null`: off; its `seconds` are the self
+    /// pass's alone).
     pub self_contact: Option<SelfStats>,
-    /// The body's tips found through the cloth, and corrected, over both stages
-    /// (`collide::body_points`; `null`: off, with cloth against cloth).
-    pub tips: Option<crate::collide::body_points::Pushed>,
+    /// The body's tips found through the cloth, and corrected, over both stages, and the
+    /// pass's wall time (`collide::body_points`; `null`: off, with cloth against cloth).
+    pub tips: Option<TipsReport>,
     /// The waist held while sewing (`--hold-waist`; `null`: not held): heights (the
     /// simulation's z, m: above the floor for the `garment` command) and the girth, m.
     pub held_waist: Option<gd::HoldReport>,
@@ -227,7 +238,10 @@ pub(super) fn outcome(
         triangles: g.world.model.triangles.len(),
         seam_springs: g.seams.len(),
         self_contact: g.world.self_contact.as_ref().map(|s| s.totals),
-        tips: (g.world.self_contact.as_ref()).map(|s| s.tips_pushed),
+        tips: (g.world.self_contact.as_ref()).map(|s| TipsReport {
+            pushed: s.tips_pushed,
+            seconds: s.tips_seconds,
+        }),
         moving_fraction: moving,
         garment: whole,
         panels,
