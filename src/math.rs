@@ -162,3 +162,16 @@ pub fn short(x: f64) -> String {
         s
     }
 }
+
+/// SplitMix64's output function of `z`: a fixed, well-spread hash of a counter (treap
+/// priorities, seeded perturbations), the same on every machine.
+///
+/// ```
+/// assert_eq!(drapekit::math::mix(0), 0xE220_A839_7B1D_CDAF);
+/// ```
+pub fn mix(z: u64) -> u64 {
+    let mut z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}

@@ -267,6 +267,7 @@ struct GarmentFile {
     self_collision: Option<bool>,
     cloth_friction: Option<f64>,
     hold_waist: Option<HoldWaistFile>,
+    perturb: Option<u64>,
 }
 
 /// `garment.hold_waist`: `"off"`, `"auto"` or a height in the scene's units.
@@ -1257,6 +1258,7 @@ fn garment_spec(
             }
         },
     };
+    settings.perturb = g.perturb;
     if g.self_collision == Some(false) {
         settings.self_collision = None;
     }

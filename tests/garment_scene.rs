@@ -135,6 +135,45 @@ fn a_garment_scene_drapes_as_the_garment_command_does() {
 }
 
 #[test]
+fn a_garment_scenes_perturb_is_the_commands() {
+    let dir = tube_folder();
+    let d = dir.path();
+    let scene = d.join("tube.toml");
+    std::fs::write(&scene, tube_scene("settle_max = 0.1\nperturb = 3")).unwrap();
+    let (by_scene, by_command) = (d.join("scene_out"), d.join("command_out"));
+    let args = [
+        "drape",
+        scene.to_str().unwrap(),
+        "-o",
+        by_scene.to_str().unwrap(),
+    ];
+    run_json(&[&args[..], &["--json"]].concat());
+    let pattern = d.join("tube_specification.json");
+    let body = d.join("column.obj");
+    let mut args = vec!["garment", pattern.to_str().unwrap(), "--body"];
+    args.extend([body.to_str().unwrap(), "-o", by_command.to_str().unwrap()]);
+    args.extend(["--spacing", "0.02", "--settle-max", "0.1", "--json"]);
+    let plain = run_json(&args);
+    args.extend(["--perturb", "3"]);
+    let g = run_json(&args);
+    let read = |p: &Path| {
+        drapekit::io::read_mesh(p, &Default::default())
+            .unwrap()
+            .mesh
+    };
+    let (a, b) = (
+        read(&by_scene.join("tube.obj")),
+        read(&by_command.join("tube.obj")),
+    );
+    // The same perturbed start, to the bit (the frames differ by an exact swap and sign).
+    for (p, q) in a.positions.iter().zip(&b.positions) {
+        assert_eq!(*p, Point3::new(q.x, -q.z, q.y));
+    }
+    // And not the unperturbed run's.
+    assert_ne!(plain["drape"], g["drape"]);
+}
+
+#[test]
 fn a_garment_scene_in_centimetres_places_the_pattern_by_its_keys() {
     // The column moved 30 cm along x and the tube with it (`translation`, in the scene's
     // centimetres), turned a quarter about the vertical (`rotation`: the tube is round, the
@@ -352,6 +391,8 @@ fn bad_garment_keys_are_refused_by_key_before_work() {
             "key 'garment.hold_waist'",
             "must be a finite height",
         ),
+        ("perturb = -1", "perturb = -1", "expected u64"),
+        ("perturb = 0.5", "perturb = 0.5", "expected u64"),
         ("size = 40", "unknown field `size`", "expected one of"),
     ];
     for (line, key, what) in cases {

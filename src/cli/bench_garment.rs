@@ -5,8 +5,11 @@
 //! command's defaults. Each row: particles, the two stages (simulated and wall seconds, the
 //! sewing's last seam gap, whether the drape came to rest), the whole wall time (sewing,
 //! drape and the measures) and the verdict with what failed. The goal is each garment at
-//! rest in at most 60 s of wall time. One run per garment (a garment takes tens of seconds to
-//! minutes): quote it with the load average.
+//! rest in at most 60 s of wall time. One run per garment by default (a garment takes tens of
+//! seconds to minutes): quote it with the load average. With `--seeds N`, each garment also
+//! runs from N - 1 starts perturbed by a tenth of a micron (`garment::perturb`), and a line
+//! gives each measure's median and range: the spread that chance alone makes, against which a
+//! change to the simulator is judged.
 
 use super::garment::{judge, read_body};
 use crate::cloth::fabric::Fabric;
@@ -41,6 +44,11 @@ pub struct GarmentBench {
     /// Hold the patterns' waist edges while sewing, as `garment --hold-waist`.
     #[arg(long, default_value = "off", value_name = "off|auto|M")]
     pub hold_waist: String,
+    /// Runs per garment: the first from the placement exactly, the others perturbed by a
+    /// tenth of a micron with seeds 1, 2, ... (`garment --perturb`); with more than one, a
+    /// line per garment gives each measure's median and range.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..))]
+    pub seeds: u64,
 }
 
 /// The issue's runs: (pattern, body).
@@ -78,6 +86,13 @@ pub struct GarmentRow {
     pub failed: Vec<String>,
     /// The waist held while sewing (`--hold-waist`), or `null`.
     pub held_waist: Option<gd::HoldReport>,
+    /// The perturbation's seed (`--seeds`), or `null`: the placement exactly.
+    pub seed: Option<u64>,
+    /// The verdict's measures of the whole garment.
+    pub body_crossing_edges: usize,
+    pub self_crossing_edges: usize,
+    pub max_strain: f64,
+    pub seam_gap_max_mm: f64,
 }
 
 /// Runs the benchmark.
@@ -103,34 +118,18 @@ pub fn run(a: GarmentBench) -> anyhow::Result<()> {
         let pattern_path = dir.join(format!("patterns/{p}_specification.json"));
         let pattern = crate::garment::read(&pattern_path)?;
         let body = read_body(&dir.join(format!("bodies/{b}.obj")), "auto", &pattern)?.mesh;
-        let t = Instant::now();
-        let g = gd::sew_and_drape(
-            &pattern,
-            vec![gd::body_collider(body)],
-            &settings,
-            &|_| {},
-            None,
-        )?;
-        let j = judge(&g);
-        let row = GarmentRow {
-            pattern: p.into(),
-            body: b.into(),
-            particles: g.world.model.len(),
-            sew_seconds: g.sew.time,
-            sew_wall_seconds: g.sew.wall_seconds,
-            sew_gap_mm: g.sew.seam_gap_max * 1e3,
-            drape_seconds: g.drape.time,
-            drape_wall_seconds: g.drape.wall_seconds,
-            at_rest: g.drape.done,
-            wall_seconds: t.elapsed().as_secs_f64(),
-            verdict: if j.failed.is_empty() { "pass" } else { "fail" }.into(),
-            failed: j.failed,
-            held_waist: g.hold,
-        };
-        if !a.json {
-            print_row(&row);
+        let first = rows.len();
+        for seed in (0..a.seeds).map(|k| (k > 0).then_some(k)) {
+            settings.perturb = seed;
+            let row = run_one(&pattern, &body, (p, b), &settings)?;
+            if !a.json {
+                print_row(&row);
+            }
+            rows.push(row);
         }
-        rows.push(row);
+        if a.seeds > 1 && !a.json {
+            print_spread(&rows[first..]);
+        }
     }
     if a.json {
         println!("{}", serde_json::to_string_pretty(&rows)?);
@@ -138,11 +137,79 @@ pub fn run(a: GarmentBench) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// One garment sewn and draped with `settings`, as its row.
+fn run_one(
+    pattern: &crate::garment::Pattern,
+    body: &crate::mesh::TriMesh,
+    (p, b): (&str, &str),
+    settings: &GarmentSettings,
+) -> anyhow::Result<GarmentRow> {
+    let t = Instant::now();
+    let g = gd::sew_and_drape(
+        pattern,
+        vec![gd::body_collider(body.clone())],
+        settings,
+        &|_| {},
+        None,
+    )?;
+    let j = judge(&g);
+    Ok(GarmentRow {
+        pattern: p.into(),
+        body: b.into(),
+        particles: g.world.model.len(),
+        sew_seconds: g.sew.time,
+        sew_wall_seconds: g.sew.wall_seconds,
+        sew_gap_mm: g.sew.seam_gap_max * 1e3,
+        drape_seconds: g.drape.time,
+        drape_wall_seconds: g.drape.wall_seconds,
+        at_rest: g.drape.done,
+        wall_seconds: t.elapsed().as_secs_f64(),
+        verdict: if j.failed.is_empty() { "pass" } else { "fail" }.into(),
+        failed: j.failed,
+        held_waist: g.hold,
+        seed: settings.perturb,
+        body_crossing_edges: j.whole.body_crossing_edges,
+        self_crossing_edges: j.whole.self_crossing_edges,
+        max_strain: j.whole.max_strain,
+        seam_gap_max_mm: j.whole.seam_gap_max_mm,
+    })
+}
+
+/// The median and the range of `v` (not empty).
+fn spread(v: &[f64]) -> (f64, f64, f64) {
+    let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    (super::bench::median(v), lo, hi)
+}
+
+/// One line: each measure's median and range over one garment's runs.
+fn print_spread(rows: &[GarmentRow]) {
+    let of = |f: &dyn Fn(&GarmentRow) -> f64| {
+        let (m, lo, hi) = spread(&rows.iter().map(f).collect::<Vec<_>>());
+        format!("{m} ({lo} to {hi})")
+    };
+    let rest = rows.iter().filter(|r| r.at_rest).count();
+    println!(
+        "    over {} runs, median (range): through the body {}; through the cloth {}; \
+         strain {} %; wall {} s; at rest {rest} of {}",
+        rows.len(),
+        of(&|r| r.body_crossing_edges as f64),
+        of(&|r| r.self_crossing_edges as f64),
+        of(&|r| (r.max_strain * 1e4).round() / 100.0),
+        of(&|r| (r.wall_seconds * 10.0).round() / 10.0),
+        rows.len()
+    );
+}
+
 /// One line per garment, then what failed.
 fn print_row(r: &GarmentRow) {
+    let seed = r
+        .seed
+        .map(|s| format!(" (perturbed, seed {s})"))
+        .unwrap_or_default();
     println!(
-        "{} on {}: {} particles; sewing {:.2} s ({:.1} s wall, gap {:.1} mm); drape {:.2} s \
-         ({:.1} s wall, {}); {:.1} s wall in all; {}",
+        "{} on {}{seed}: {} particles; sewing {:.2} s ({:.1} s wall, gap {:.1} mm); drape \
+         {:.2} s ({:.1} s wall, {}); {:.1} s wall in all; {}",
         r.pattern,
         r.body,
         r.particles,
@@ -161,5 +228,14 @@ fn print_row(r: &GarmentRow) {
     }
     for f in &r.failed {
         println!("    {f}");
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn the_spread_is_the_median_and_the_range() {
+        assert_eq!(super::spread(&[3.0, 1.0, 10.0, 2.0]), (2.5, 1.0, 10.0));
+        assert_eq!(super::spread(&[7.0]), (7.0, 7.0, 7.0));
     }
 }

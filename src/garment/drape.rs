@@ -138,6 +138,10 @@ pub struct GarmentSettings {
     /// Where the edges labelled `lower_interface` (a skirt's or trousers' top) are held while
     /// sewing (`waist`); default [`WaistHold::Off`] (see the README's measurements).
     pub hold_waist: WaistHold,
+    /// Start from the placed panels moved by a tenth of a micron, with this seed
+    /// (`perturb::perturb`, `perturb::PERTURB_M`): runs with several seeds give the spread of
+    /// a garment's measures. `None` (default): the placement exactly.
+    pub perturb: Option<u64>,
 }
 
 /// Where a garment's waist edges are held while sewing (`waist`).
@@ -195,6 +199,7 @@ impl Default for GarmentSettings {
             self_collision: Some(SelfCollisionOptions::default()),
             body_clearance: None,
             hold_waist: WaistHold::Off,
+            perturb: None,
         }
     }
 }
@@ -699,6 +704,9 @@ pub fn sew_and_drape(
         seam_k,
         hold,
     } = garment_world(pattern, bodies, settings)?;
+    if let Some(seed) = settings.perturb {
+        super::perturb::perturb(&mut world.state.x, seed, super::perturb::PERTURB_M);
+    }
     let from = hold.as_ref().map(|h| held_mean(h, &world.state.x));
     let sew_report = sew(
         &mut world,

@@ -8,7 +8,8 @@
 //! [`gathers`] lists the stitches that join edges of different lengths; [`fit_check`] compares
 //! each closed ring of the sewn garment with the body's girth where it sits, before a drape;
 //! [`measure`] measures and judges a drape, and [`spots`] says where it fails; [`frame`] brings
-//! a body from elsewhere under the pattern's panels.
+//! a body from elsewhere under the pattern's panels; [`perturb`] starts a run a tenth of a
+//! micron off, to measure how much of its outcome is chance.
 
 pub mod assemble;
 pub mod curve;
@@ -19,6 +20,7 @@ pub mod frame;
 pub mod gathers;
 pub mod lift;
 pub mod measure;
+pub mod perturb;
 pub mod sample;
 pub mod spec;
 pub mod spots;

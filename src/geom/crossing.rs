@@ -291,20 +291,13 @@ impl<'a> Sweep<'a> {
 
 /// A node's treap priority: a fixed hash of its edge, so the run is repeatable.
 fn priority(e: u32) -> u64 {
-    mix(u64::from(e))
-}
-
-/// SplitMix64's output function of `z`.
-fn mix(z: u64) -> u64 {
-    let mut z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
+    crate::math::mix(u64::from(e))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::mix;
 
     /// The reference: every pair of non-adjacent edges.
     fn pairwise(p: &[Point2]) -> Option<(usize, usize)> {
