@@ -47,6 +47,40 @@ fn stitched_samples_become_seam_springs_between_the_placed_sides() {
 }
 
 #[test]
+fn a_panels_rim_band_bends_by_default_and_not_when_asked() {
+    let pattern = parse(&tube(), Path::new("tube.json")).unwrap();
+    let on = AssembleOptions {
+        spacing: 0.02,
+        ..AssembleOptions::default()
+    };
+    let off = AssembleOptions {
+        rim_bending: false,
+        ..on.clone()
+    };
+    let (a, b) = (
+        assemble(&pattern, &on).unwrap(),
+        assemble(&pattern, &off).unwrap(),
+    );
+    for ((_, with, _, _), (_, without, _, _)) in a.pieces.iter().zip(&b.pieces) {
+        // The rim's elements come after the piece's own, which are unchanged.
+        assert_eq!(with.bends[..without.bends.len()], without.bends[..]);
+        let rim = &with.bends[without.bends.len()..];
+        // A 60 x 40 cm panel at 2 cm: a band one triangle deep has an interior edge for each
+        // outline sample at least (100 samples round the outline).
+        assert!(rim.len() >= 100, "{}", rim.len());
+        for e in rim {
+            assert_eq!(e.nodes.len(), 4);
+            assert!(e.nodes.iter().any(|&v| v as usize >= with.grid_particles));
+            // At rest on the flat piece, and the weights sum to zero.
+            let s: drapekit::math::Vec2 = (e.nodes.iter().zip(&e.weights))
+                .map(|(&v, &w)| with.flat[v as usize].coords * w)
+                .sum();
+            assert!(s.norm() < 1e-12 && e.weights.iter().sum::<f64>().abs() < 1e-9);
+        }
+    }
+}
+
+#[test]
 fn a_tube_sewn_round_a_cylinder_closes_and_is_round() {
     let pattern = parse(&tube(), Path::new("tube.json")).unwrap();
     let mut settings = GarmentSettings::default();
@@ -694,6 +728,20 @@ fn a_perturbed_start_is_repeatable_and_said() {
     assert_eq!((said(&r0), said(&r1)), (0, 1), "{}", r1["assumed"]);
     // A tenth of a micron changes nothing a user would see: the tube still closes.
     assert!(r1["sew"]["done"].as_bool().unwrap(), "{}", r1["sew"]);
+}
+
+#[test]
+fn the_no_rim_bending_flag_reaches_the_cloth() {
+    let body = common::cylinder(0.186, 0.5, 1.5, 48);
+    let obj =
+        |d: &tempfile::TempDir| std::fs::read_to_string(d.path().join("out/tube.obj")).unwrap();
+    let (with, r0, _) = tube_on(&body, &[]);
+    let (without, r1, _) = tube_on(&body, &["--no-rim-bending"]);
+    assert_ne!(obj(&with), obj(&without));
+    // Either way the tube closes round the cylinder.
+    for r in [r0, r1] {
+        assert!(r["sew"]["done"].as_bool().unwrap(), "{}", r["sew"]);
+    }
 }
 
 #[test]

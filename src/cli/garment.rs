@@ -63,6 +63,10 @@ pub struct GarmentArgs {
     /// Turn cloth-against-cloth contact off (faster; panels may pass through each other).
     #[arg(long)]
     pub no_self_collision: bool,
+    /// Turn the hinges over each panel's rim band off (on by default; the README's `bench
+    /// garment` measures both).
+    #[arg(long)]
+    pub no_rim_bending: bool,
     /// Friction between layers of cloth (Coulomb, a fraction of the normal impulse).
     #[arg(long, default_value_t = 0.0)]
     pub cloth_friction: f64,
@@ -355,6 +359,7 @@ pub(super) fn settings(args: &GarmentArgs) -> anyhow::Result<GarmentSettings> {
     s.body_clearance = args.body_clearance;
     s.hold_waist = hold_waist(&args.hold_waist)?;
     s.perturb = args.perturb;
+    s.assemble.rim_bending = !args.no_rim_bending;
     s.self_collision = (!args.no_self_collision).then(|| SelfCollisionOptions {
         friction: args.cloth_friction,
         ..SelfCollisionOptions::default()
