@@ -309,7 +309,9 @@ fn an_open_seam_is_named_with_where_its_widest_gap_is() {
 fn an_ear_on_the_bar_does_not_poke_through_the_cloth_sewn_over_it() {
     // A steep pyramid (an ear: a 1 cm square base, 8 mm high) on top of the bar, between the
     // particles of the 2 cm cloth: the particle pass keeps every particle off it, but without
-    // the tips pass (`collide::body_points`) it pokes through the triangles over it.
+    // the tips pass (`collide::body_points`) it pokes through the triangles over it. Its base
+    // is sunk 0.5 mm into the bar: its base corners are buried tips, which would push the
+    // cloth down into the bar (with the rim hinges, 1 edge stayed through the pyramid).
     let pattern = parse(SHOULDER, Path::new("shoulder.json")).unwrap();
     let mut settings = GarmentSettings::default();
     settings.assemble.spacing = 0.02;

@@ -27,6 +27,12 @@
 //! (A whole push at once, `d + c` up to an edge length, stretched the armholes of a hoody over
 //! the shoulders to 32%; the solver spreads a tenth of an edge per step over the cloth.)
 //!
+//! *Several objects:* a vertex buried in another object of the scene is no tip
+//! ([`BodyPoints::without_buried`]): `v + c n_v` (one contact distance out along its normal)
+//! inside another object means the cloth cannot pass the vertex on that side. An ear modelled
+//! as its own mesh sunk into the head: its base corners point into the head, and they would
+//! push the cloth down through it while the apex pushes it up.
+//!
 //! *Limit:* a body part thinner than the reach `MAX_DEPTH (c + e)` can be taken for a tip from
 //! both sides (a pyramid 4.7 cm high under a 5 cm cloth triangle: its apex pushes the cloth
 //! up, its base corners down); at 1 cm cloth that is a part under 1.2 cm thick crossing the
@@ -38,6 +44,7 @@
 //! count.
 
 use super::cloth::{segment_crosses_triangle, ClothHash};
+use super::inside::inside;
 use super::Collider;
 use crate::math::{Aabb, Point3, Vec3};
 use crate::par;
@@ -119,6 +126,20 @@ impl BodyPoints {
             start,
             next,
         }
+    }
+
+    /// `self` without the tips buried in another object of the scene: a vertex `v` of `c` whose
+    /// probe point `v + probe n_v` lies inside one of `others` is no tip (the cloth cannot be
+    /// pushed past it into that object). An ear sunk into a head made of another mesh, a body
+    /// pressed into a seat: the base corners of the ear point into the head, and a cloth cut by
+    /// the ear would otherwise be pushed down through the head by them and up by the apex.
+    pub fn without_buried(mut self, c: &Collider, others: &[&Collider], probe: f64) -> Self {
+        for (p, nv) in c.mesh.positions.iter().zip(&mut self.normals) {
+            if *nv != Vec3::zeros() && others.iter().any(|o| inside(o, &(p + *nv * probe))) {
+                *nv = Vec3::zeros();
+            }
+        }
+        self
     }
 
     /// The neighbours of vertex `i`.
@@ -415,19 +436,24 @@ mod tests {
         assert_eq!(pass(&body, &mut x, &mut v, &tris).pairs, 0);
     }
 
+    /// The cloth of `tris` with a 1 mm thickness `dist`, inverse masses `inv` and a 4 cm edge.
+    fn cloth_04<'a>(tris: &'a [[u32; 3]], dist: &'a [f64], inv: &'a [f64]) -> Cloth<'a> {
+        Cloth {
+            triangles: tris,
+            thickness: dist,
+            thickness_max: 0.001,
+            clearance: 0.0,
+            inv_mass: inv,
+            edge: 0.04,
+        }
+    }
+
     #[test]
     fn a_pinned_corner_stays_and_the_others_take_the_push() {
         let (body, mut x, tris) = setup(0.047);
         let points = BodyPoints::new(&body);
         let (dist, inv) = (vec![0.001; 3], vec![0.0, 1.0, 1.0]);
-        let cloth = Cloth {
-            triangles: &tris,
-            thickness: &dist,
-            thickness_max: 0.001,
-            clearance: 0.0,
-            inv_mass: &inv,
-            edge: 0.04,
-        };
+        let cloth = cloth_04(&tris, &dist, &inv);
         let mut hash = ClothHash::new(3, &tris, &[]);
         hash.rebuild(&x, &tris, 0.05, reach(0.001, 0.04));
         let a0 = x[0];
@@ -439,5 +465,42 @@ mod tests {
         let n = (x[1] - x[0]).cross(&(x[2] - x[0])).normalize();
         let over = n.dot(&(x[0] - Point3::new(0.0, 0.0, 0.05)));
         assert!(over > 0.0009, "{over}");
+    }
+
+    #[test]
+    fn a_pyramid_sunk_in_a_slab_pushes_the_cloth_only_up() {
+        // The pyramid's base 1 mm into a 10 cm slab below it; the triangle cuts the pyramid
+        // 3 cm up. Alone, the base corners 0 and 2 (their normals point down: each lies in both
+        // base faces) are tips through it as well as the apex, and the corners come first: the
+        // triangle goes down twice (4 mm at each corner's point) and up once. Beside the slab they are buried.
+        let (body, x0, tris) = setup(0.03);
+        let mut slab = crate::mesh::generate::boxed(Vec3::new(0.2, 0.2, 0.1));
+        for p in &mut slab.positions {
+            p.z += 0.001 - 0.05;
+        }
+        let slab = Collider::new("slab".into(), slab, [4, 4, 4], 0.001, None);
+        let alone = BodyPoints::new(&body);
+        let beside = BodyPoints::new(&body).without_buried(&body, &[&slab], 0.001);
+        assert_eq!(beside.normals[4], alone.normals[4]);
+        for i in 0..4 {
+            assert!(alone.normals[i] != Vec3::zeros());
+            assert_eq!(beside.normals[i], Vec3::zeros(), "corner {i}");
+        }
+        let (dist, inv) = (vec![0.001; 3], vec![1.0; 3]);
+        let cloth = cloth_04(&tris, &dist, &inv);
+        let mut hash = ClothHash::new(3, &tris, &[]);
+        hash.rebuild(&x0, &tris, 0.05, reach(0.001, 0.04));
+        let run = |points: &BodyPoints| {
+            let (mut x, mut v) = (x0.clone(), vec![Vec3::zeros(); 3]);
+            let done = push_cloth(&body, points, &cloth, &hash, &mut x, &mut v);
+            let w = [4.0 / 13.0, 4.0 / 13.0, 5.0 / 13.0];
+            (done.corrected, (0..3).map(|k| w[k] * x[k].z).sum::<f64>())
+        };
+        let (n, z) = run(&alone);
+        assert_eq!(n, 3);
+        assert!(z < 0.03, "{z}: net down, towards the slab");
+        let (n, z) = run(&beside);
+        assert_eq!(n, 1);
+        assert!((z - 0.034).abs() < 1e-9, "{z}");
     }
 }

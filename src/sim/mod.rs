@@ -186,7 +186,12 @@ impl SelfContact {
         let cell = crate::collide::cloth::AUTO_CELL * self.edge;
         self.hash.rebuild(x, &model.triangles, cell.max(grow), grow);
         for (k, c) in colliders.iter().enumerate().filter(|(k, _)| reach[*k]) {
-            let points = self.tips[k].get_or_insert_with(|| BodyPoints::new(c));
+            let points = self.tips[k].get_or_insert_with(|| {
+                let others: Vec<&Collider> = (colliders.iter().enumerate())
+                    .filter_map(|(j, o)| (j != k).then_some(o))
+                    .collect();
+                BodyPoints::new(c).without_buried(c, &others, self.thickness_max + c_max)
+            });
             let cloth = body_points::Cloth {
                 triangles: &model.triangles,
                 thickness: &model.thickness,
