@@ -145,5 +145,13 @@ mod tests {
         assert_eq!(spokes, [(0, 4), (1, 4), (2, 4), (3, 4)]);
         // No particle at or after 5 is on the outline: no hinge.
         assert!(rim_hinges(&flat, &tris, 5, 1e-5).is_empty());
+        // Edge 0-1 whose only outline particle (3) is an opposite corner: all four nodes
+        // count, so it has a hinge (hinges only over edges ending on the outline were tried
+        // and not kept: `docs/notebook-garments.md`, 2026-12-06).
+        let pair =
+            [(0.0, 0.0), (1.0, 0.0), (0.5, 0.8), (0.5, -0.8)].map(|(x, y)| Point2::new(x, y));
+        let tris = [[0, 1, 2], [1, 0, 3]];
+        assert_eq!(rim_hinges(&pair, &tris, 3, 1e-5).len(), 1);
+        assert!(rim_hinges(&pair, &tris, 4, 1e-5).is_empty());
     }
 }
