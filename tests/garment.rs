@@ -645,6 +645,44 @@ fn bench_garment_holds_dress_pencils_waist_at_mean_alls_natural_waist() {
 }
 
 #[test]
+fn bench_garment_measures_the_rim_hinges_both_ways() {
+    // `bench garment --no-rim-bending` builds the panels without the hinges over their rim
+    // bands: the row says so, and the same garment from the same start sews differently.
+    let Some(root) = common::realdata() else {
+        return;
+    };
+    let run = |extra: &[&str]| {
+        let mut args = vec![
+            "bench",
+            "garment",
+            "--realdata",
+            root.to_str().unwrap(),
+            "--only",
+            "hoody",
+            "--spacing",
+            "0.1",
+            "--settle-max",
+            "0.05",
+            "--json",
+        ];
+        args.extend_from_slice(extra);
+        let o = common::run(&args);
+        let (stdout, stderr) = common::text(&o);
+        assert!(o.status.success(), "{stderr}");
+        let rows: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+        rows.as_array().unwrap()[0].clone()
+    };
+    let (with, without) = (run(&[]), run(&["--no-rim-bending"]));
+    assert_eq!(with["rim_bending"], true);
+    assert_eq!(without["rim_bending"], false);
+    assert_eq!(with["particles"], without["particles"]);
+    assert_ne!(
+        with["max_strain"], without["max_strain"],
+        "{with} {without}"
+    );
+}
+
+#[test]
 fn a_bad_hold_waist_is_refused_by_name() {
     // Real inputs: the refusal comes before any work, and nothing is written.
     let dir = tempfile::tempdir().unwrap();

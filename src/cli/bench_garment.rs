@@ -49,6 +49,10 @@ pub struct GarmentBench {
     /// line per garment gives each measure's median and range.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..))]
     pub seeds: u64,
+    /// No hinges over the panels' rim bands, as `garment --no-rim-bending` (to measure what
+    /// they do: README, `bench garment`).
+    #[arg(long)]
+    pub no_rim_bending: bool,
 }
 
 /// The issue's runs: (pattern, body).
@@ -88,6 +92,8 @@ pub struct GarmentRow {
     pub held_waist: Option<gd::HoldReport>,
     /// The perturbation's seed (`--seeds`), or `null`: the placement exactly.
     pub seed: Option<u64>,
+    /// Whether the panels had hinges over their rim bands (`--no-rim-bending`: false).
+    pub rim_bending: bool,
     /// The verdict's measures of the whole garment.
     pub body_crossing_edges: usize,
     pub self_crossing_edges: usize,
@@ -108,6 +114,7 @@ pub fn run(a: GarmentBench) -> anyhow::Result<()> {
     settings.assemble.fabric = fabric;
     settings.settle_max = a.settle_max;
     settings.hold_waist = super::garment::hold_waist(&a.hold_waist)?;
+    settings.assemble.rim_bending = !a.no_rim_bending;
     let keep = |p: &str, b: &str| {
         a.only
             .as_ref()
@@ -168,6 +175,7 @@ fn run_one(
         failed: j.failed,
         held_waist: g.hold,
         seed: settings.perturb,
+        rim_bending: settings.assemble.rim_bending,
         body_crossing_edges: j.whole.body_crossing_edges,
         self_crossing_edges: j.whole.self_crossing_edges,
         max_strain: j.whole.max_strain,
@@ -206,7 +214,12 @@ fn print_row(r: &GarmentRow) {
     let seed = r
         .seed
         .map(|s| format!(" (perturbed, seed {s})"))
-        .unwrap_or_default();
+        .unwrap_or_default()
+        + if r.rim_bending {
+            ""
+        } else {
+            " (no rim hinges)"
+        };
     println!(
         "{} on {}{seed}: {} particles; sewing {:.2} s ({:.1} s wall, gap {:.1} mm); drape \
          {:.2} s ({:.1} s wall, {}); {:.1} s wall in all; {}",
