@@ -473,10 +473,7 @@ fn pattern_on(
         "--json",
     ];
     args.extend_from_slice(extra);
-    let o = common::run(&args);
-    let (stdout, stderr) = common::text(&o);
-    assert!(o.status.success(), "{stderr}");
-    let r: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    let (r, stderr) = common::run_json(&args);
     (dir, r, stderr)
 }
 
@@ -666,11 +663,7 @@ fn bench_garment_measures_the_rim_hinges_both_ways() {
             "--json",
         ];
         args.extend_from_slice(extra);
-        let o = common::run(&args);
-        let (stdout, stderr) = common::text(&o);
-        assert!(o.status.success(), "{stderr}");
-        let rows: serde_json::Value = serde_json::from_str(&stdout).unwrap();
-        rows.as_array().unwrap()[0].clone()
+        common::run_json(&args).0[0].clone()
     };
     let (with, without) = (run(&[]), run(&["--no-rim-bending"]));
     assert_eq!(with["rim_bending"], true);

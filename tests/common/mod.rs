@@ -27,6 +27,18 @@ pub fn text(o: &Output) -> (String, String) {
     )
 }
 
+/// Runs drapekit, asserts it succeeded (with its stderr as the message) and parses its stdout
+/// as JSON; also returns stderr.
+pub fn run_json(args: &[&str]) -> (serde_json::Value, String) {
+    let o = run(args);
+    let (stdout, stderr) = text(&o);
+    assert!(o.status.success(), "{stderr}");
+    (
+        serde_json::from_str(&stdout).expect("JSON on stdout"),
+        stderr,
+    )
+}
+
 /// `../shared/realdata` beside the repository. Missing: the test says so and is skipped, except
 /// under `CI=true`, where it fails.
 pub fn realdata() -> Option<PathBuf> {
