@@ -604,7 +604,7 @@ fn bench_garment_holds_dress_pencils_waist_at_mean_alls_natural_waist() {
     let Some(root) = common::realdata() else {
         return;
     };
-    let o = common::run(&[
+    let (rows, _) = common::run_json(&[
         "bench",
         "garment",
         "--realdata",
@@ -619,9 +619,6 @@ fn bench_garment_holds_dress_pencils_waist_at_mean_alls_natural_waist() {
         "auto",
         "--json",
     ]);
-    let (stdout, stderr) = common::text(&o);
-    assert!(o.status.success(), "{stderr}");
-    let rows: serde_json::Value = serde_json::from_str(&stdout).unwrap();
     let rows = rows.as_array().unwrap();
     assert_eq!(rows.len(), 2, "mean_all and mean_female");
     for r in rows {
