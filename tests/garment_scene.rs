@@ -30,10 +30,7 @@ fn tube_scene(extra: &str) -> String {
 
 /// Runs drapekit with `args` and returns its JSON report.
 fn run_json(args: &[&str]) -> serde_json::Value {
-    let o = common::run(args);
-    let (stdout, stderr) = common::text(&o);
-    assert!(o.status.success(), "{args:?}: {stderr}");
-    serde_json::from_str(&stdout).unwrap()
+    common::run_json(args).0
 }
 
 /// Runs `drape --json` on the scene `text` (written as `scene.toml` into the tube's folder,
@@ -48,10 +45,9 @@ fn scene_json(
     let scene = d.join("scene.toml");
     std::fs::write(&scene, text).unwrap();
     let args = ["drape", scene.to_str().unwrap(), "-o"];
-    let o = common::run(&[&args[..], &[d.join("s").to_str().unwrap(), "--json"]].concat());
-    let (stdout, stderr) = common::text(&o);
-    assert!(o.status.success(), "{stderr}");
-    (dir, serde_json::from_str(&stdout).unwrap(), stderr)
+    let (report, stderr) =
+        common::run_json(&[&args[..], &[d.join("s").to_str().unwrap(), "--json"]].concat());
+    (dir, report, stderr)
 }
 
 #[test]
