@@ -809,6 +809,31 @@ fn the_garment_command_reports_a_tube_on_a_cylinder() {
     assert_eq!(fit["too_short"], 0, "{fit}");
     assert!(fit["rings"][0]["judged"].as_bool().unwrap(), "{fit}");
     assert!(!stderr.contains("fit check"), "{stderr}");
+    // How the two open ends hang after the drape (`garment::hang`): the fit check's rings,
+    // each 1.2 m flat (two straight 60 cm edges), round the column now.
+    let hang = r["hang"].as_array().unwrap();
+    assert_eq!(hang.len(), 2, "{hang:?}");
+    let face = 0.186 * (std::f64::consts::PI / 48.0).cos();
+    let skin = 0.0003 + 0.125 * 0.02;
+    for (h, f) in hang.iter().zip(fit["rings"].as_array().unwrap()) {
+        let m = |k: &str| h[k].as_f64().unwrap();
+        assert_eq!(h["edges"], f["edges"], "{h}");
+        assert_eq!(h["kind"], "opening");
+        assert!((m("rest_length_m") - 1.2).abs() < 1e-9, "{h}");
+        // Round the column (at least the circle the cloth keeps off its faces) and not
+        // stretched past the verdict's 5%.
+        let round = std::f64::consts::TAU * (face + 0.9 * skin);
+        assert!(m("length_m") > round && m("length_m") < 1.2 * 1.05, "{h}");
+        // Level: the seams close at one height and the drape pulls every side down alike.
+        let span = h["height_m"][1].as_f64().unwrap() - h["height_m"][0].as_f64().unwrap();
+        assert!(span < 0.01, "{h}");
+        // 0.1 s of drape: it slid down (the column's friction holds it back), less than a
+        // free fall's g t^2 / 2 = 4.9 cm.
+        assert!(m("rise_m") < 0.0 && m("rise_m") > -0.049, "{h}");
+    }
+    // The tube slid as a whole: its two ends 40 cm apart, as sewn.
+    let mean = |k: usize| hang[k]["height_mean_m"].as_f64().unwrap();
+    assert!(((mean(1) - mean(0)).abs() - 0.4).abs() < 0.005, "{hang:?}");
     // The verdict's moving fraction is the drape's own last frame.
     let moving = r["moving_fraction"].as_f64().unwrap();
     assert_eq!(Some(moving), r["drape"]["moving_fraction"].as_f64(), "{r}");

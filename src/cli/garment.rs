@@ -211,6 +211,10 @@ pub struct GarmentOutcome {
     pub spots_left_out: usize,
     /// The stitches that gather a longer edge into a shorter one (`garment::gathers`).
     pub gathers: Vec<crate::garment::gathers::Gather>,
+    /// How each ring (a hem, a neckline, a waist seam; the fit check's) hangs at the end: its
+    /// length against its flat length, its heights and how far it rose (`garment::hang`;
+    /// heights are the simulation's z, m).
+    pub hang: Vec<crate::garment::hang::RingHang>,
     /// The limits of the verdict.
     pub thresholds: Thresholds,
     /// `pass`, or `fail`.
@@ -255,6 +259,7 @@ pub(super) fn outcome(
         panels,
         open_seams: open_seams(pattern, &g, thresholds.seam_gap_max_mm, to_mesh),
         gathers: crate::garment::gathers::gathers(pattern),
+        hang: g.rings,
         thresholds,
         verdict: if failed.is_empty() { "pass" } else { "fail" }.into(),
         failed,
@@ -796,6 +801,33 @@ fn print_summary(r: &GarmentReport) {
     print_outcome(&r.outcome, r.wall_seconds);
 }
 
+/// The summary's line on how a ring hangs: its first edges, its heights, how far it rose, its
+/// length against its flat length.
+fn hang_line(h: &crate::garment::hang::RingHang) -> String {
+    let kind = match h.kind {
+        crate::garment::fit_check::RingKind::Seam => "seam",
+        crate::garment::fit_check::RingKind::Opening => "opening",
+    };
+    let mut edges = h
+        .edges
+        .iter()
+        .take(3)
+        .cloned()
+        .collect::<Vec<_>>()
+        .join(" ");
+    if h.edges.len() > 3 {
+        edges += &format!(" and {} more", h.edges.len() - 3);
+    }
+    format!(
+        "ring ({kind} {edges}): {:.3} to {:.3} m up, rose {:.1} cm; {:.1} cm long ({:.1} cm flat)",
+        h.height_m[0],
+        h.height_m[1],
+        h.rise_m * 100.0,
+        h.length_m * 100.0,
+        h.rest_length_m * 100.0
+    )
+}
+
 /// The summary's lines on the sewing, the drape, the measures and the verdict.
 pub(super) fn print_outcome(r: &GarmentOutcome, wall_seconds: f64) {
     println!(
@@ -848,6 +880,9 @@ pub(super) fn print_outcome(r: &GarmentOutcome, wall_seconds: f64) {
             ""
         }
     );
+    for h in &r.hang {
+        println!("  {}", hang_line(h));
+    }
     println!("  verdict: {} in {:.1} s", r.verdict, wall_seconds);
     for f in &r.failed {
         println!("    failed: {f}");

@@ -125,6 +125,8 @@ pub struct Assembled {
     /// The particles of the edges labelled `waist::WAIST_LABEL` (a skirt's or trousers' top),
     /// held at the body's waist while sewing; sorted, each once.
     pub waist: Vec<u32>,
+    /// Each panel edge's particles from its start to its end, `[panel][edge]`.
+    pub edge_particles: Vec<Vec<Vec<u32>>>,
 }
 
 /// What stops a pattern from becoming cloth.
@@ -223,35 +225,42 @@ pub fn assemble(
         }
     }
     let seam_k = SEAM_STIFFNESS * opts.fabric.stretch[0].max(opts.fabric.stretch[1]);
-    let waist = labelled(
-        pattern,
-        &sampled,
-        &outline_particle,
-        super::waist::WAIST_LABEL,
-    );
+    let edge_particles = edge_particles(&sampled, &outline_particle);
+    let waist = labelled(pattern, &edge_particles, super::waist::WAIST_LABEL);
     Ok(Assembled {
         pieces,
         seams,
         seam_k,
         seam_bends,
         waist,
+        edge_particles,
     })
 }
 
-/// The particles of every edge labelled `label`, sorted, each once.
-fn labelled(
-    pattern: &Pattern,
+/// Each panel edge's particles, from its start to its end, `[panel][edge]`.
+fn edge_particles(
     sampled: &[super::sample::SampledPanel],
     outline_particle: &[Vec<u32>],
-    label: &str,
-) -> Vec<u32> {
+) -> Vec<Vec<Vec<u32>>> {
+    sampled
+        .iter()
+        .zip(outline_particle)
+        .map(|(s, particle)| {
+            let n = s.points.len();
+            (s.edge_start.iter().zip(&s.segments))
+                .map(|(&first, &count)| (0..=count).map(|j| particle[(first + j) % n]).collect())
+                .collect()
+        })
+        .collect()
+}
+
+/// The particles of every edge labelled `label`, sorted, each once.
+fn labelled(pattern: &Pattern, edge_particles: &[Vec<Vec<u32>>], label: &str) -> Vec<u32> {
     let mut out = Vec::new();
-    for (k, panel) in pattern.panels.iter().enumerate() {
-        let (s, n) = (&sampled[k], sampled[k].points.len());
-        for (e, l) in panel.labels.iter().enumerate() {
+    for (panel, edges) in pattern.panels.iter().zip(edge_particles) {
+        for (l, particles) in panel.labels.iter().zip(edges) {
             if l.as_deref() == Some(label) {
-                let first = s.edge_start[e];
-                out.extend((0..=s.segments[e]).map(|j| outline_particle[k][(first + j) % n]));
+                out.extend(particles);
             }
         }
     }

@@ -310,6 +310,9 @@ pub struct Garment {
     pub sew_open: Vec<super::measure::OpenSeam>,
     /// Stage 2.
     pub drape: StageReport,
+    /// How each ring of the garment (a hem, a neckline, a waist seam) hangs at the end
+    /// (`garment::hang`).
+    pub rings: Vec<super::hang::RingHang>,
 }
 
 /// What stops a garment.
@@ -348,6 +351,8 @@ pub struct GarmentWorld {
     pub seam_k: f64,
     /// The waist held while sewing, if any (`GarmentSettings::hold_waist`).
     pub hold: Option<Hold>,
+    /// Each panel edge's particles (`Assembled::edge_particles`).
+    pub edge_particles: Vec<Vec<Vec<u32>>>,
 }
 
 /// The world of a garment on `bodies` (metres, z up; the first is the body the garment is
@@ -396,6 +401,7 @@ pub fn garment_world(
         seams: assembled.seams,
         seam_k: assembled.seam_k,
         hold,
+        edge_particles: assembled.edge_particles,
     })
 }
 
@@ -703,7 +709,9 @@ pub fn sew_and_drape(
         seams,
         seam_k,
         hold,
+        edge_particles,
     } = garment_world(pattern, bodies, settings)?;
+    let placed = world.state.x.clone();
     if let Some(seed) = settings.perturb {
         super::perturb::perturb(&mut world.state.x, seed, super::perturb::PERTURB_M);
     }
@@ -726,6 +734,7 @@ pub fn sew_and_drape(
     let limit_mm = settings.seam_closed * 1e3;
     let sew_open = super::measure::open_seams(pattern, &seams, &world.state.x, limit_mm);
     let drape = settle(&mut world, &seams, seam_k, settings, cancel)?;
+    let rings = super::hang::hang(pattern, &edge_particles, &placed, &world.state.x);
     Ok(Garment {
         world,
         seams,
@@ -733,6 +742,7 @@ pub fn sew_and_drape(
         sew: sew_report,
         sew_open,
         drape,
+        rings,
     })
 }
 

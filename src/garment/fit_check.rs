@@ -211,6 +211,46 @@ fn name(pattern: &Pattern, e: &EdgeRef) -> String {
     format!("{}:{}", pattern.panels[e.panel].name, e.edge)
 }
 
+/// A garment edge's name: its sides' `panel:edge`, joined by `+`.
+fn joined_name(pattern: &Pattern, sides: &[EdgeRef]) -> String {
+    let names: Vec<String> = sides.iter().map(|s| name(pattern, s)).collect();
+    names.join("+")
+}
+
+/// The side that measures a garment edge: a stitch's shorter side (a gathered side can be no
+/// longer than the side it is sewn to), an open edge's only one.
+fn short_side(pattern: &Pattern, sides: &[EdgeRef]) -> usize {
+    let lens: Vec<f64> = sides.iter().map(|s| length_m(pattern, s)).collect();
+    usize::from(lens.len() == 2 && lens[1] < lens[0])
+}
+
+/// A ring of the sewn garment, as the fit check finds them and in its order, by its edges.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RingEdges {
+    /// Seam or opening.
+    pub kind: RingKind,
+    /// Its edges' names, as [`Ring::edges`].
+    pub names: Vec<String>,
+    /// Per garment edge, the panel edge that measures it (a stitch's shorter side).
+    pub sides: Vec<EdgeRef>,
+}
+
+/// The rings of the sewn garment `pattern` (as [`fit_check`] lists them), by their edges.
+pub fn ring_edges(pattern: &Pattern) -> Vec<RingEdges> {
+    let (edges, found) = rings(pattern);
+    found
+        .into_iter()
+        .map(|(kind, walk)| {
+            let sides = walk.iter().map(|&(e, _)| &edges[e].sides);
+            RingEdges {
+                kind,
+                names: sides.clone().map(|s| joined_name(pattern, s)).collect(),
+                sides: sides.map(|s| s[short_side(pattern, s)]).collect(),
+            }
+        })
+        .collect()
+}
+
 /// A ring's garment edges in order, each with the direction walked (true: `from` to `to`).
 type Walk = Vec<(usize, bool)>;
 
@@ -406,20 +446,9 @@ pub fn fit_check(
         let (mut length, mut names, mut panels) = (0.0, Vec::new(), Vec::<String>::new());
         for &(e, forward) in &ring {
             let sides = &edges[e].sides;
-            let lens: Vec<f64> = sides.iter().map(|s| length_m(pattern, s)).collect();
-            let short = if lens.len() == 2 && lens[1] < lens[0] {
-                1
-            } else {
-                0
-            };
-            length += lens[short];
-            names.push(
-                sides
-                    .iter()
-                    .map(|s| name(pattern, s))
-                    .collect::<Vec<_>>()
-                    .join("+"),
-            );
+            let short = short_side(pattern, sides);
+            length += length_m(pattern, &sides[short]);
+            names.push(joined_name(pattern, sides));
             for (k, s) in sides.iter().enumerate() {
                 let pname = &pattern.panels[s.panel].name;
                 if !panels.contains(pname) {

@@ -7,7 +7,8 @@
 //! [`sample`] samples the outlines with the two edges of every stitch paired point to point;
 //! [`gathers`] lists the stitches that join edges of different lengths; [`fit_check`] compares
 //! each closed ring of the sewn garment with the body's girth where it sits, before a drape;
-//! [`measure`] measures and judges a drape, and [`spots`] says where it fails; [`frame`] brings
+//! [`measure`] measures and judges a drape, [`spots`] says where it fails and [`hang`] how
+//! each of those rings hangs after it; [`frame`] brings
 //! a body from elsewhere under the pattern's panels; [`perturb`] starts a run a tenth of a
 //! micron off, to measure how much of its outcome is chance.
 
@@ -18,6 +19,7 @@ pub mod facing;
 pub mod fit_check;
 pub mod frame;
 pub mod gathers;
+pub mod hang;
 pub mod lift;
 pub mod measure;
 pub mod perturb;
