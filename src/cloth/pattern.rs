@@ -7,7 +7,11 @@
 //!
 //! **Triangles.** Each full cell is two triangles. The band between the outline and the full
 //! cells is a polygon with holes (the outline, and the boundaries of the blocks of full cells);
-//! it is bridged and ear-clipped (`mesh::polygon::triangulate_with_holes`). The triangles give
+//! it is bridged and ear-clipped (`mesh::polygon::triangulate_with_holes`), and every band edge
+//! longer than [`CHORD`] spacings is then flipped towards Delaunay (`mesh::delaunay`): ear
+//! clipping fans from one grid corner to many outline samples where the outline runs along a
+//! staircase of cells (the hoody's armhole had fans of 7.5 cm at 1 cm), and a chord that long
+//! cuts through a curved body the cloth rests on. The triangles give
 //! the masses (a third of each incident triangle's area times the density) and the output mesh.
 //!
 //! **Springs** (`method.md` s. 2), constants from the fabric (`fabric`):
@@ -45,6 +49,10 @@ use std::collections::HashMap;
 /// A band edge within 22.5 degrees of a thread (cosine at least this) is a stretch spring; the
 /// others are on the bias, where woven cloth shears (`SpringKind::Shear`).
 pub const BAND_THREAD_COS: f64 = 0.923_879_532_511_286_7;
+
+/// A band edge longer than this many spacings is a chord across the band: the band's
+/// triangulation flips it towards Delaunay (`mesh::delaunay`).
+pub const CHORD: f64 = 2.0;
 
 /// Grid corners closer than this many spacings to the outline are not kept.
 pub const CLEARANCE: f64 = 0.4;
@@ -538,7 +546,8 @@ pub fn build_with_holes(
     }
     holes.extend(cut_loops);
     let pos3: Vec<Point3> = flat.iter().map(|p| Point3::new(p.x, p.y, 0.0)).collect();
-    let band = triangulate_with_holes(&pos3, &outer, &holes);
+    let mut band = triangulate_with_holes(&pos3, &outer, &holes);
+    crate::mesh::delaunay::flip_to_delaunay(&flat, &mut band, CHORD * h);
     triangles.extend_from_slice(&band);
 
     // Masses.
@@ -925,6 +934,51 @@ mod tests {
                 0.5 * e.c * b.norm_squared()
             })
             .sum()
+    }
+
+    /// The longest edge of `p`'s triangles, in spacings `h`.
+    fn longest_edge(p: &Piece, h: f64) -> f64 {
+        let len = |a: u32, b: u32| (p.flat[b as usize] - p.flat[a as usize]).norm();
+        let edges = p
+            .triangles
+            .iter()
+            .flat_map(|t| (0..3).map(move |k| (t[k], t[(k + 1) % 3])));
+        edges.map(|(a, b)| len(a, b)).fold(0.0, f64::max) / h
+    }
+
+    #[test]
+    fn the_band_has_no_chords_across_it() {
+        // Outlines running at small angles to the grid's rows and columns, and round ones:
+        // the band between the outline and the grid is at most about 1.4 spacings wide, so
+        // no edge of a good triangulation is longer than two. Ear-clipped alone, the second
+        // ellipse has an edge of 2.24 spacings (the hoody's armhole had fans of 7.5).
+        let h = 0.01;
+        let mut outlines: Vec<Vec<Point2>> = [0.004, 0.013, 0.021, 0.034, 0.055]
+            .iter()
+            .map(|&d| {
+                vec![
+                    Point2::new(0.0, 0.0),
+                    Point2::new(0.3, 0.0),
+                    Point2::new(0.3 + d, 0.3),
+                    Point2::new(0.0, 0.3 - d),
+                ]
+            })
+            .collect();
+        for (r, n) in [(0.2, 48), (0.137, 120)] {
+            outlines.push(
+                (0..n)
+                    .map(|k| {
+                        let t = std::f64::consts::TAU * k as f64 / n as f64;
+                        Point2::new(r * t.cos(), 0.7 * r * t.sin())
+                    })
+                    .collect(),
+            );
+        }
+        for o in &outlines {
+            let p = build(o, h, &Fabric::cotton(), &Pins::default()).unwrap();
+            let l = longest_edge(&p, h);
+            assert!(l <= CHORD, "an edge of {l:.2} spacings");
+        }
     }
 
     /// A circle of radius 0.2 m sampled at 48 points.

@@ -3,6 +3,7 @@
 
 pub mod clean;
 pub mod closest;
+pub mod delaunay;
 pub mod diagnose;
 pub mod generate;
 pub mod orient;
