@@ -268,6 +268,7 @@ struct GarmentFile {
     cloth_friction: Option<f64>,
     hold_waist: Option<HoldWaistFile>,
     perturb: Option<u64>,
+    keep_placement: Option<bool>,
 }
 
 /// `garment.hold_waist`: `"off"`, `"auto"` or a height in the scene's units.
@@ -1259,6 +1260,7 @@ fn garment_spec(
         },
     };
     settings.perturb = g.perturb;
+    settings.clear_panels = !g.keep_placement.unwrap_or(false);
     if g.self_collision == Some(false) {
         settings.self_collision = None;
     }

@@ -448,20 +448,16 @@ fn tube_on(body: &TriMesh, extra: &[&str]) -> (tempfile::TempDir, serde_json::Va
     pattern_on(&tube(), body, &[&["--settle-max", "0.1"], extra].concat())
 }
 
-/// `garment` with `pattern` (JSON text) on `body` at 2 cm, and `extra`: the folder, the JSON
-/// report and stderr.
-fn pattern_on(
-    pattern_text: &str,
-    body: &TriMesh,
-    extra: &[&str],
-) -> (tempfile::TempDir, serde_json::Value, String) {
+/// The files of a `garment` run of `pattern` (JSON text) on `body` in a new folder, and its
+/// arguments up to the spacing (2 cm), writing into `out` there.
+fn garment_run(pattern_text: &str, body: &TriMesh) -> (tempfile::TempDir, Vec<String>) {
     let dir = tempfile::tempdir().unwrap();
     let pattern = dir.path().join("tube_specification.json");
     std::fs::write(&pattern, pattern_text).unwrap();
     let body_path = dir.path().join("column.obj");
     common::write_y_up_obj(body, &body_path);
     let out = dir.path().join("out");
-    let mut args = vec![
+    let args = [
         "garment",
         pattern.to_str().unwrap(),
         "--body",
@@ -470,8 +466,20 @@ fn pattern_on(
         out.to_str().unwrap(),
         "--spacing",
         "0.02",
-        "--json",
     ];
+    (dir, args.iter().map(|a| a.to_string()).collect())
+}
+
+/// `garment` with `pattern` (JSON text) on `body` at 2 cm, and `extra`: the folder, the JSON
+/// report and stderr.
+fn pattern_on(
+    pattern_text: &str,
+    body: &TriMesh,
+    extra: &[&str],
+) -> (tempfile::TempDir, serde_json::Value, String) {
+    let (dir, args) = garment_run(pattern_text, body);
+    let mut args: Vec<&str> = args.iter().map(String::as_str).collect();
+    args.push("--json");
     args.extend_from_slice(extra);
     let (r, stderr) = common::run_json(&args);
     (dir, r, stderr)
@@ -1626,4 +1634,95 @@ fn the_garmentcode_bodies_stay_and_a_makehuman_body_is_moved_under_the_panels() 
             "{p}: {d}"
         );
     }
+}
+
+/// The 20 cm column of `cylinder` moved 12.25 cm towards the back (drapekit's +y, where the
+/// tube's back panel hangs flat at y = 0.30 m): it pokes 2.25 cm through that panel (its 48-gon
+/// has a vertex straight behind), and stays 37.75 cm from the front one.
+fn column_through_the_back() -> TriMesh {
+    let mut body = common::cylinder(0.2, 0.5, 1.5, 48);
+    for p in &mut body.positions {
+        p.y += 0.1225;
+    }
+    body
+}
+
+#[test]
+fn a_panel_placed_through_the_body_is_moved_out_along_its_normal() {
+    let pattern = parse(&tube(), Path::new("tube.json")).unwrap();
+    let mut settings = GarmentSettings::default();
+    settings.assemble.spacing = 0.02;
+    let world = |clear: bool| {
+        let mut s = settings.clone();
+        s.clear_panels = clear;
+        garment_world(&pattern, vec![body_collider(column_through_the_back())], &s).unwrap()
+    };
+    let (kept, cleared) = (world(false), world(true));
+    assert!(kept.moved_out.is_empty());
+    let m = &cleared.moved_out;
+    assert_eq!(m.len(), 1, "{m:?}");
+    // The back panel: its middle column is inside until it is 2.25 cm out, so after 4 steps
+    // of 5 mm it is still in, after 5 it is out, and it goes one step more.
+    assert_eq!(pattern.panels[m[0].index].name, "back");
+    assert!(m[0].cleared);
+    assert!((m[0].distance - 6.0 * drapekit::garment::clear::STEP).abs() < 1e-12);
+    let body = &cleared.world.colliders[0];
+    let inside = |x: &[Point3]| {
+        (x.iter())
+            .filter(|p| drapekit::collide::inside::inside(body, p))
+            .count()
+    };
+    let (before, after) = (&kept.world.state.x, &cleared.world.state.x);
+    assert_eq!(inside(before), m[0].inside);
+    assert!(m[0].inside >= 20, "{}", m[0].inside);
+    assert_eq!(inside(after), 0);
+    // The front panel is where it was; the back one moved rigidly along +y (its normal, away
+    // from the body's axis) by the distance.
+    let back = cleared.edge_particles[m[0].index].concat();
+    let front = cleared.edge_particles[1 - m[0].index].concat();
+    for &i in &front {
+        assert_eq!(before[i as usize], after[i as usize]);
+    }
+    for &i in &back {
+        let d = after[i as usize] - before[i as usize];
+        assert!(
+            (d - Vec3::new(0.0, m[0].distance, 0.0)).norm() < 1e-12,
+            "{d}"
+        );
+    }
+    let moved = (0..before.len()).filter(|&i| before[i] != after[i]).count();
+    assert_eq!(moved, cleared.world.model.len() / 2);
+}
+
+#[test]
+fn the_garment_command_says_which_panel_it_moved_out_and_keeps_it_when_asked() {
+    let body = column_through_the_back();
+    let quick = ["--sew-max", "0.02", "--settle-max", "0.02"];
+    let (_dir, r, _) = pattern_on(&tube(), &body, &quick);
+    let m = &r["panels_moved_out"];
+    assert_eq!(m.as_array().map(Vec::len), Some(1), "{m}");
+    assert_eq!(m[0]["panel"], "back");
+    assert_eq!(m[0]["cleared"], true);
+    assert!(
+        (m[0]["distance"].as_f64().unwrap() - 0.03).abs() < 1e-12,
+        "{m}"
+    );
+    assert!(m[0]["particles_inside"].as_u64().unwrap() >= 20, "{m}");
+    let (_dir, r, _) = pattern_on(
+        &tube(),
+        &body,
+        &[&quick[..], &["--keep-placement"]].concat(),
+    );
+    assert_eq!(r["panels_moved_out"], serde_json::json!([]));
+    // The summary says it in a line of its own.
+    let (_dir, args) = garment_run(&tube(), &body);
+    let mut args: Vec<&str> = args.iter().map(String::as_str).collect();
+    args.extend_from_slice(&quick);
+    let o = common::run(&args);
+    let (out, err) = common::text(&o);
+    assert!(
+        out.contains("placed through the body: panel back (")
+            && out.contains("particles inside), moved 0.030 out along its normal"),
+        "{out}{err}"
+    );
 }

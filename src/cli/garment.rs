@@ -93,6 +93,10 @@ pub struct GarmentArgs {
     /// a few seeds show how much of the outcome is chance (`garment::perturb`)
     #[arg(long, value_name = "SEED")]
     pub perturb: Option<u64>,
+    /// Sew the panels where the pattern puts them even when one passes through the body (by
+    /// default such a panel is first moved out along its normal: `garment::clear`)
+    #[arg(long)]
+    pub keep_placement: bool,
 }
 
 /// The edges of `pattern` labelled as a waist (`garment::waist::WAIST_LABEL`).
@@ -170,6 +174,21 @@ pub struct TipsReport {
     pub seconds: f64,
 }
 
+/// A panel placed through the body (`garment::clear`).
+#[derive(Debug, Clone, Serialize)]
+pub struct PanelMoved {
+    /// The panel.
+    pub panel: String,
+    /// Its particles inside the body as placed.
+    pub particles_inside: usize,
+    /// How far it was moved along its outward normal, in the garment output's units (m for
+    /// `drapekit garment`); 0 when it could not be cleared.
+    pub distance: f64,
+    /// Whether it was cleared of the body (within `garment::clear::REACH`); if not, it was
+    /// sewn where the pattern puts it.
+    pub cleared: bool,
+}
+
 /// A sewn and draped garment as both `drapekit garment` and a scene's `[[garment]]` report it.
 #[derive(Debug, Serialize)]
 pub struct GarmentOutcome {
@@ -185,6 +204,9 @@ pub struct GarmentOutcome {
     /// The body's tips found through the cloth, and corrected, over both stages, and the
     /// pass's wall time (`collide::body_points`; `null`: off, with cloth against cloth).
     pub tips: Option<TipsReport>,
+    /// The panels placed through the body and moved out along their normals before sewing
+    /// (`garment::clear`; empty when none was, or with `--keep-placement`).
+    pub panels_moved_out: Vec<PanelMoved>,
     /// The waist held while sewing (`--hold-waist`; `null`: not held): heights (the
     /// simulation's z, m: above the floor for the `garment` command) and the girth, m.
     pub held_waist: Option<gd::HoldReport>,
@@ -265,6 +287,14 @@ pub(super) fn outcome(
         failed,
         spots,
         spots_left_out,
+        panels_moved_out: (g.moved_out.iter())
+            .map(|m| PanelMoved {
+                panel: pattern.panels[m.index].name.clone(),
+                particles_inside: m.inside,
+                distance: m.distance * to_units,
+                cleared: m.cleared,
+            })
+            .collect(),
         held_waist: g.hold,
         sew: g.sew,
         sew_open_seams: in_mesh(g.sew_open, to_mesh),
@@ -364,6 +394,7 @@ pub(super) fn settings(args: &GarmentArgs) -> anyhow::Result<GarmentSettings> {
     s.body_clearance = args.body_clearance;
     s.hold_waist = hold_waist(&args.hold_waist)?;
     s.perturb = args.perturb;
+    s.clear_panels = !args.keep_placement;
     s.assemble.rim_bending = !args.no_rim_bending;
     s.self_collision = (!args.no_self_collision).then(|| SelfCollisionOptions {
         friction: args.cloth_friction,
@@ -830,6 +861,20 @@ fn hang_line(h: &crate::garment::hang::RingHang) -> String {
 
 /// The summary's lines on the sewing, the drape, the measures and the verdict.
 pub(super) fn print_outcome(r: &GarmentOutcome, wall_seconds: f64) {
+    for m in &r.panels_moved_out {
+        let what = if m.cleared {
+            format!("moved {:.3} out along its normal", m.distance)
+        } else {
+            format!(
+                "not clear within {} m along its normal: sewn where placed",
+                crate::garment::clear::REACH
+            )
+        };
+        println!(
+            "  placed through the body: panel {} ({} particles inside), {what}",
+            m.panel, m.particles_inside
+        );
+    }
     println!(
         "  sewing: {:.2} s simulated ({}), largest seam gap {:.2} mm, seams at {} m/h^2",
         r.sew.time,

@@ -90,6 +90,11 @@ impl Placement {
         self.rotation() * p + self.translation
     }
 
+    /// Where the direction `v` turns to.
+    pub fn apply_vector(&self, v: Vec3) -> Vec3 {
+        self.rotation() * v
+    }
+
     /// Where `p` came from.
     pub fn unapply(&self, p: Point3) -> Point3 {
         if *self == Placement::default() {

@@ -28,8 +28,10 @@
 //! bodies, the first is the one the garment is sewn on (facing, meeting points).
 
 use super::assemble::{
-    assemble, seam_gaps, seam_springs, AssembleError, AssembleOptions, SeamPair,
+    assemble, seam_gaps, seam_springs, AssembleError, AssembleOptions, Assembled, Placement,
+    SeamPair,
 };
+use super::clear::MovedOut;
 use super::spec::Pattern;
 use crate::cloth::elements::SpringKind;
 use crate::cloth::integrate::SolverSettings;
@@ -142,6 +144,9 @@ pub struct GarmentSettings {
     /// (`perturb::perturb`, `perturb::PERTURB_M`): runs with several seeds give the spread of
     /// a garment's measures. `None` (default): the placement exactly.
     pub perturb: Option<u64>,
+    /// Move each panel placed through the first body out along its normal before sewing
+    /// (`clear`; default on). Off: the panels are sewn where the pattern puts them.
+    pub clear_panels: bool,
 }
 
 /// Where a garment's waist edges are held while sewing (`waist`).
@@ -200,6 +205,7 @@ impl Default for GarmentSettings {
             body_clearance: None,
             hold_waist: WaistHold::Off,
             perturb: None,
+            clear_panels: true,
         }
     }
 }
@@ -301,6 +307,8 @@ pub struct Garment {
     pub world: World,
     /// The seam springs' ends.
     pub seams: Vec<SeamPair>,
+    /// The panels placed through the body and moved out before sewing (`clear`).
+    pub moved_out: Vec<MovedOut>,
     /// The waist held while sewing, if any.
     pub hold: Option<HoldReport>,
     /// Stage 1.
@@ -353,6 +361,8 @@ pub struct GarmentWorld {
     pub hold: Option<Hold>,
     /// Each panel edge's particles (`Assembled::edge_particles`).
     pub edge_particles: Vec<Vec<Vec<u32>>>,
+    /// The panels that were placed through the body and moved out (`clear`).
+    pub moved_out: Vec<MovedOut>,
 }
 
 /// The world of a garment on `bodies` (metres, z up; the first is the body the garment is
@@ -377,7 +387,12 @@ pub fn garment_world(
     if !facing.is_empty() {
         return Err(GarmentError::FacingIn(facing));
     }
-    let assembled = assemble(pattern, &settings.assemble).map_err(GarmentError::Assemble)?;
+    let mut assembled = assemble(pattern, &settings.assemble).map_err(GarmentError::Assemble)?;
+    let moved_out = if settings.clear_panels {
+        clear_placed(pattern, &mut assembled, body, &settings.assemble.placement)
+    } else {
+        Vec::new()
+    };
     let hold = waist_hold(&assembled.waist, &body.mesh, settings.hold_waist);
     let (mut model, x) = ClothModel::assemble(&assembled.pieces, Vec3::zeros());
     model.add_springs(&seam_springs(&assembled));
@@ -402,7 +417,25 @@ pub fn garment_world(
         seam_k: assembled.seam_k,
         hold,
         edge_particles: assembled.edge_particles,
+        moved_out,
     })
+}
+
+/// The panels of `assembled` placed through `body`, moved out along their normals
+/// (`clear::clear_panels`).
+fn clear_placed(
+    pattern: &Pattern,
+    assembled: &mut Assembled,
+    body: &Collider,
+    placement: &Placement,
+) -> Vec<MovedOut> {
+    let normals = super::clear::outward_normals(pattern, placement);
+    let mut placed: Vec<Vec<Point3>> = (assembled.pieces.iter()).map(|p| p.3.clone()).collect();
+    let moved = super::clear::clear_panels(&mut placed, &normals, body);
+    for m in &moved {
+        assembled.pieces[m.index].3 = std::mem::take(&mut placed[m.index]);
+    }
+    moved
 }
 
 /// The hold of the waist `particles` on `body` by `how`: none when there are no such
@@ -710,6 +743,7 @@ pub fn sew_and_drape(
         seam_k,
         hold,
         edge_particles,
+        moved_out,
     } = garment_world(pattern, bodies, settings)?;
     let placed = world.state.x.clone();
     if let Some(seed) = settings.perturb {
@@ -738,6 +772,7 @@ pub fn sew_and_drape(
     Ok(Garment {
         world,
         seams,
+        moved_out,
         hold,
         sew: sew_report,
         sew_open,

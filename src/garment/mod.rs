@@ -13,6 +13,7 @@
 //! micron off, to measure how much of its outcome is chance.
 
 pub mod assemble;
+pub mod clear;
 pub mod curve;
 pub mod drape;
 pub mod facing;
