@@ -510,3 +510,27 @@ fn a_panel_facing_into_the_objects_is_refused_under_the_patterns_key() {
         "{stderr}"
     );
 }
+
+#[test]
+fn a_garment_scene_moves_a_panel_placed_through_its_object_unless_told_to_keep_it() {
+    // The column moved 12.25 cm towards the back pokes 2.25 cm through the tube's back panel.
+    let through = |d: &Path| {
+        let mut body = common::cylinder(0.2, 0.5, 1.5, 48);
+        for p in &mut body.positions {
+            p.y += 0.1225;
+        }
+        common::write_y_up_obj(&body, &d.join("column.obj"));
+    };
+    let quick = "sew_max = 0.02\nsettle_max = 0.02";
+    let (_d, r, _) = scene_json(&tube_scene(quick), through);
+    let m = &r["panels_moved_out"];
+    assert_eq!(m.as_array().map(Vec::len), Some(1), "{m}");
+    assert_eq!(m[0]["panel"], "back");
+    assert!(
+        (m[0]["distance"].as_f64().unwrap() - 0.03).abs() < 1e-12,
+        "{m}"
+    );
+    let keep = format!("{quick}\nkeep_placement = true");
+    let (_d, r, _) = scene_json(&tube_scene(&keep), through);
+    assert_eq!(r["panels_moved_out"], serde_json::json!([]));
+}
