@@ -520,3 +520,23 @@ fn convert_cli_on_a_real_file_writes_the_report() {
     assert_eq!(r["input_format"], "stl-ascii");
     assert!(r["flipped_faces"].as_u64().unwrap() > 0);
 }
+
+#[test]
+fn stls_pinched_at_a_point_are_split_there() {
+    let Some(d) = meshes() else { return };
+    // Read as it is, each STL has a vertex where two fans of faces meet (its corners are
+    // positions only); split, each is open and consistently wound.
+    for (file, added) in [
+        ("trimesh/teapot.stl", 1),
+        ("assimp/STL/sphereWithHole.stl", 2),
+    ] {
+        let before = raw(&d, file);
+        assert_eq!(before.shell_state, ShellState::Irregular, "{file}");
+        assert_eq!(before.non_manifold_edges, 0, "{file}");
+        assert!(before.non_manifold_vertices > 0, "{file}");
+        let (_, r) = prepared(&d, file);
+        assert_eq!(r.split_vertices, added, "{file}");
+        assert_eq!(r.after.non_manifold_vertices, 0, "{file}");
+        assert_eq!(r.after.shell_state, ShellState::Oriented, "{file}");
+    }
+}

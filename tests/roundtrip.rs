@@ -342,3 +342,53 @@ fn results_do_not_depend_on_the_thread_count() {
         "output or report differs with --jobs"
     );
 }
+
+#[test]
+fn an_stl_of_two_tetrahedra_touching_at_a_corner_converts_to_two_closed_ones() {
+    // Two outward tetrahedra sharing the corner (1, 1, 1) and nothing else: an STL has no
+    // indices, so reading merges that corner into one vertex, a non-manifold one.
+    let dir = tempfile::tempdir().unwrap();
+    let p = |x: f64, y: f64, z: f64| Point3::new(x, y, z);
+    let both = TriMesh {
+        positions: vec![
+            // The first: its apex at (1, 1, 1) over the base (0,0,0), (1,0,0), (0,1,0).
+            p(0.0, 0.0, 0.0),
+            p(1.0, 0.0, 0.0),
+            p(0.0, 1.0, 0.0),
+            p(1.0, 1.0, 1.0),
+            // The second: its base corner at (1, 1, 1).
+            p(1.0, 1.0, 1.0),
+            p(2.0, 1.0, 1.0),
+            p(1.0, 2.0, 1.0),
+            p(1.0, 1.0, 2.0),
+        ],
+        faces: [0u32, 4]
+            .iter()
+            .flat_map(|&o| [[0, 2, 1], [0, 1, 3], [1, 2, 3], [2, 0, 3]].map(|f| f.map(|v| v + o)))
+            .collect(),
+    };
+    let src = dir.path().join("pinched.stl");
+    write_mesh(&src, &both, &WriteOptions::default(), &[]).unwrap();
+    let out = dir.path().join("out.obj");
+    let (src, out_s) = (src.to_str().unwrap(), out.to_str().unwrap());
+    let report = |extra: &[&str]| {
+        let r = common::run_json(&[&["convert", src, "-o", out_s, "--json"], extra].concat()).0;
+        (r, read_mesh(&out, &ReadOptions::default()).unwrap().mesh)
+    };
+    let (r, m) = report(&[]);
+    assert_eq!(r["input_vertices"], 7);
+    assert_eq!(r["split_vertices"], 1);
+    assert_eq!(
+        (r["output_vertices"].as_u64(), m.positions.len()),
+        (Some(8), 8)
+    );
+    assert_eq!(r["shell_state"], "closed");
+    assert_eq!(r["closed_components"], 2);
+    assert_closed_components_outward(&m, "split");
+    let (r, m) = report(&["--keep-nonmanifold-vertices"]);
+    assert_eq!(
+        (r["split_vertices"].as_u64(), m.positions.len()),
+        (Some(0), 7)
+    );
+    assert_eq!(r["shell_state"], "irregular");
+}

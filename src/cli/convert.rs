@@ -50,6 +50,10 @@ pub struct ConvertArgs {
     /// Do not reorient faces.
     #[arg(long)]
     pub no_orient: bool,
+    /// Keep non-manifold vertices (a surface pinched at a point) instead of splitting each
+    /// into one vertex per fan.
+    #[arg(long)]
+    pub keep_nonmanifold_vertices: bool,
     /// Units of the input: mm, cm, m or in (with --to-units).
     #[arg(long, value_name = "U", value_parser = parse_units)]
     pub units: Option<Units>,
@@ -85,6 +89,7 @@ impl ConvertArgs {
             weld: (!self.no_weld).then_some(self.weld_tol),
             drop_degenerate: !self.keep_degenerate,
             drop_duplicates: !self.keep_duplicates,
+            split_vertices: !self.keep_nonmanifold_vertices,
             orient: !self.no_orient,
             units: self.units.zip(self.to_units),
             up: self.up.zip(self.to_up),
@@ -121,6 +126,8 @@ pub struct ConvertReport {
     pub duplicate_faces: usize,
     /// Faces whose winding was reversed.
     pub flipped_faces: usize,
+    /// Vertices added by splitting non-manifold vertices (one per extra fan).
+    pub split_vertices: usize,
     /// Quads in the input.
     pub quads: usize,
     /// Quads whose corners are not in one plane.
@@ -220,6 +227,7 @@ pub fn run(args: ConvertArgs) -> anyhow::Result<()> {
         degenerate_faces: prep.degenerate_faces,
         duplicate_faces: prep.duplicate_faces,
         flipped_faces: prep.flipped_faces,
+        split_vertices: prep.split_vertices,
         quads: read.info.polygons.quads,
         nonplanar_quads: read.info.polygons.nonplanar_quads,
         components: prep.after.components,
@@ -283,6 +291,12 @@ fn print_summary(r: &ConvertReport, out: &Path) {
         "  dropped {} degenerate and {} duplicate faces; flipped {} faces; {} quads ({} non-planar)",
         r.degenerate_faces, r.duplicate_faces, r.flipped_faces, r.quads, r.nonplanar_quads
     );
+    if r.split_vertices > 0 {
+        println!(
+            "  split non-manifold vertices: {} added (a surface pinched at a point, one vertex per fan)",
+            r.split_vertices
+        );
+    }
     println!(
         "  {} components ({} closed, {} open), {} non-manifold edges; shell state: {}",
         r.components, r.closed_components, r.open_components, r.non_manifold_edges, r.shell_state

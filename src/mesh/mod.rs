@@ -10,6 +10,7 @@ pub mod orient;
 pub mod polygon;
 pub mod prepare;
 pub mod slice;
+pub mod split;
 pub mod topology;
 pub mod transform;
 pub mod trimesh;

@@ -3,7 +3,8 @@
 //!
 //! Order: units and up axis first (an absolute weld tolerance is given in input units and is
 //! scaled with the mesh), then weld, drop degenerate faces (welding can make some), drop
-//! duplicate faces, drop unreferenced vertices, orient.
+//! duplicate faces, split non-manifold vertices (`split`: a surface pinched at a point, as
+//! welding or an STL's positions can leave it), drop unreferenced vertices, orient.
 
 use super::diagnose::{diagnose_with, Diagnosis};
 use super::orient::{self, OrientReport};
@@ -22,6 +23,8 @@ pub struct PrepareOptions {
     pub drop_degenerate: bool,
     /// Drop duplicate faces (default true).
     pub drop_duplicates: bool,
+    /// Split each non-manifold vertex into one vertex per fan (default true; `split`).
+    pub split_vertices: bool,
     /// Make the winding consistent and outward (default true).
     pub orient: bool,
     /// Input and output units (default: none, no scaling).
@@ -36,6 +39,7 @@ impl Default for PrepareOptions {
             weld: Some(WeldTolerance::default()),
             drop_degenerate: true,
             drop_duplicates: true,
+            split_vertices: true,
             orient: true,
             units: None,
             up: None,
@@ -62,6 +66,8 @@ pub struct PrepareReport {
     pub degenerate_faces: usize,
     /// Duplicate faces dropped.
     pub duplicate_faces: usize,
+    /// Vertices added by splitting non-manifold vertices.
+    pub split_vertices: usize,
     /// Unreferenced vertices dropped.
     pub unreferenced_vertices: usize,
     /// Orientation, when done.
@@ -105,6 +111,11 @@ pub fn prepare(mesh: &mut TriMesh, opts: &PrepareOptions) -> PrepareReport {
     } else {
         0
     };
+    let split_vertices = if opts.split_vertices {
+        super::split::split_non_manifold_vertices(mesh)
+    } else {
+        0
+    };
     let unreferenced_vertices = mesh.drop_unreferenced_vertices();
     let topo = Topology::build(mesh);
     let plan = orient::plan(mesh, &topo, true);
@@ -130,6 +141,7 @@ pub fn prepare(mesh: &mut TriMesh, opts: &PrepareOptions) -> PrepareReport {
         weld: weld_report,
         degenerate_faces,
         duplicate_faces,
+        split_vertices,
         unreferenced_vertices,
         flipped_faces: orient_report.as_ref().map_or(0, |o| o.flipped_faces),
         orient: orient_report,
