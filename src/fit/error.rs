@@ -72,13 +72,17 @@ pub enum FitError {
     },
     /// A body mesh is clearly longer along another axis than along the up axis it was given
     /// (`--up`, default z): a standing body is tallest along its up axis.
-    #[error("{}: the body is {e} long along {longest} but only {h} along the up axis {given} (--up {given}): a standing body is tallest along its up axis; {advice}", path.display(), e = crate::math::short(*extent), h = crate::math::short(*height), advice = up_advice(*longest))]
+    #[error("{}: the body is {e} long along {longest} but only {h} along the up axis {given} (--up {given}): a standing body is tallest along its up axis; {advice}", path.display(), e = crate::math::short(*extent), h = crate::math::short(*height), advice = up_advice(*longest, *other))]
     UpAxis {
         path: PathBuf,
         given: crate::mesh::transform::Up,
         height: f64,
         longest: char,
         extent: f64,
+        /// The other up axis drapekit reads (y or z) when the body is clearly taller along it
+        /// than along `given` (a T-posed body is widest along x, its arm span, and tall along
+        /// this one).
+        other: Option<char>,
     },
     /// A mesh could not be read.
     #[error(transparent)]
@@ -120,9 +124,10 @@ impl FitError {
 }
 
 /// What to do when a body is tallest along `axis` (x, y or z) and another up axis was given.
-fn up_advice(axis: char) -> String {
-    match axis {
-        'y' | 'z' => format!("give --up {axis}"),
+fn up_advice(axis: char, other: Option<char>) -> String {
+    match (axis, other) {
+        ('y' | 'z', _) => format!("give --up {axis}"),
+        (_, Some(o)) => format!("give --up {o} (arms out, a body can be wider than tall)"),
         _ => "drapekit reads y-up and z-up bodies: rotate it to stand along y or z".into(),
     }
 }

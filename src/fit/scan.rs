@@ -65,6 +65,7 @@ pub fn check_up(body: &TriMesh, up: Up, path: &std::path::Path) -> Result<(), Fi
         Up::Z => 2,
     };
     let longest = size.imax();
+    let other = 3 - k;
     if longest != k && size[longest] > UP_AXIS_RATIO * size[k] {
         return Err(FitError::UpAxis {
             path: path.to_path_buf(),
@@ -72,6 +73,7 @@ pub fn check_up(body: &TriMesh, up: Up, path: &std::path::Path) -> Result<(), Fi
             height: size[k],
             longest: ['x', 'y', 'z'][longest],
             extent: size[longest],
+            other: (size[other] > UP_AXIS_RATIO * size[k]).then_some(['x', 'y', 'z'][other]),
         });
     }
     Ok(())
@@ -202,5 +204,11 @@ mod tests {
         assert!(e.to_string().ends_with("give --up y"), "{e}");
         let e = check_up(&block(1.7, 0.3, 0.3), Up::Y, path).unwrap_err();
         assert!(e.to_string().contains("rotate it"), "{e}");
+        // A T pose read with the wrong up axis: widest along x (the arm span), tall along y.
+        let e = check_up(&block(1.77, 1.72, 0.31), Up::Z, path).unwrap_err();
+        assert!(matches!(e, FitError::UpAxis { longest: 'x', .. }), "{e}");
+        assert!(e.to_string().contains("give --up y (arms out"), "{e}");
+        let e = check_up(&block(1.77, 0.31, 1.72), Up::Y, path).unwrap_err();
+        assert!(e.to_string().contains("give --up z (arms out"), "{e}");
     }
 }
