@@ -1726,3 +1726,126 @@ fn the_garment_command_says_which_panel_it_moved_out_and_keeps_it_when_asked() {
         "{out}{err}"
     );
 }
+
+/// A skirt on a waistband: two 60 x 5 cm band panels (their top edges labelled as the waist)
+/// at 1.15 to 1.2 m, each sewn along its bottom to a 60 x 35 cm skirt panel below (0.8 to
+/// 1.15 m), front and back sewn along both sides: the skirt hangs from the band.
+fn banded_skirt() -> String {
+    let panel = |h: f64, y: f64, z: f64, turn: f64, top: &str| {
+        format!(
+            r#"{{"vertices": [[-30, 0], [30, 0], [30, {h}], [-30, {h}]],
+            "edges": [{{"endpoints": [0, 1]}}, {{"endpoints": [1, 2]}}, {{"endpoints": [2, 3]{top}}}, {{"endpoints": [3, 0]}}],
+            "translation": [0, {y}, {z}], "rotation": [0, {turn}, 0]}}"#
+        )
+    };
+    let waist = r#", "label": "lower_interface""#;
+    let side = |a: &str, b: &str| {
+        format!(
+            r#"[{{"panel": "{a}_front", "edge": 1}}, {{"panel": "{b}_back", "edge": 3}}],
+               [{{"panel": "{a}_front", "edge": 3}}, {{"panel": "{b}_back", "edge": 1}}]"#
+        )
+    };
+    format!(
+        r#"{{"pattern": {{"panels": {{
+          "band_front": {}, "band_back": {},
+          "skirt_front": {}, "skirt_back": {}}},
+          "stitches": [{}, {},
+            [{{"panel": "band_front", "edge": 0}}, {{"panel": "skirt_front", "edge": 2}}],
+            [{{"panel": "band_back", "edge": 0}}, {{"panel": "skirt_back", "edge": 2}}]]}},
+          "parameters": {{}}, "parameter_order": [],
+          "properties": {{"curvature_coords": "relative", "units_in_meter": 100}}}}"#,
+        panel(5.0, 115.0, 30.0, 0.0, waist),
+        panel(5.0, 115.0, -30.0, 180.0, waist),
+        panel(35.0, 80.0, 30.0, 0.0, ""),
+        panel(35.0, 80.0, -30.0, 180.0, ""),
+        side("band", "band"),
+        side("skirt", "skirt"),
+    )
+}
+
+#[test]
+fn a_skirt_sewn_to_a_held_waistband_follows_it_up() {
+    let pattern = parse(&banded_skirt(), Path::new("banded.json")).unwrap();
+    let names: Vec<&str> = pattern.panels.iter().map(|p| p.name.as_str()).collect();
+    assert_eq!(
+        names,
+        ["band_back", "band_front", "skirt_back", "skirt_front"]
+    );
+    let mut settings = GarmentSettings::default();
+    settings.assemble.spacing = 0.02;
+    settings.hold_waist = drapekit::garment::drape::WaistHold::Level(1.3);
+    let body = || vec![body_collider(common::cylinder(0.17, 0.5, 1.5, 48))];
+    let GarmentWorld {
+        mut world,
+        seams,
+        hold,
+        edge_particles,
+        ..
+    } = garment_world(&pattern, body(), &settings).unwrap();
+    let mut hold = hold.unwrap();
+    // The skirt panels hang from the first band panel; the bands are held themselves.
+    assert_eq!(hold.followers, [None, None, Some(0), Some(0)]);
+    let mean_z = |x: &[Point3], panel: usize| {
+        let ids = edge_particles[panel].concat();
+        ids.iter().map(|&i| x[i as usize].z).sum::<f64>() / ids.len() as f64
+    };
+    let start = world.state.x.clone();
+    let mut alone = garment_world(&pattern, body(), &settings).unwrap().world;
+    sew(&mut world, &seams, Some(&hold), &settings, &|_| {}, None).unwrap();
+    // The same with the skirts not following: only the band's own particles pull.
+    hold.followers = vec![None; 4];
+    sew(&mut alone, &seams, Some(&hold), &settings, &|_| {}, None).unwrap();
+    let rise = |x: &[Point3], p: usize| mean_z(x, p) - mean_z(&start, p);
+    let (band, skirt) = (rise(&world.state.x, 1), rise(&world.state.x, 3));
+    let skirt_alone = rise(&alone.state.x, 3);
+    // The band's top is pulled 10 cm up, to its level (within `HOLD_REACHED`); the skirt rises
+    // with it as a whole (0.09999 m against the band's 0.09999), where hanging on the band's
+    // seam alone it rose 0.055 m.
+    assert!((band - 0.1).abs() < 0.005, "band rose {band}");
+    assert!((skirt - band).abs() < 0.002, "skirt {skirt}, band {band}");
+    assert!(skirt > skirt_alone + 0.03, "{skirt} {skirt_alone}");
+}
+
+#[test]
+fn a_bodice_sewn_to_a_held_skirt_top_does_not_follow_it() {
+    // The waisted tube's two panels are both held: neither follows. A third panel sewn to a
+    // held edge (as a bodice to a skirt's top) is not one of the skirt's followers: the
+    // seams at held edges do not join.
+    let pattern = parse(&waisted_tube(), Path::new("tube.json")).unwrap();
+    let mut settings = GarmentSettings::default();
+    settings.assemble.spacing = 0.02;
+    settings.hold_waist = drapekit::garment::drape::WaistHold::Level(1.1);
+    let world = garment_world(
+        &pattern,
+        vec![body_collider(common::cylinder(0.17, 0.5, 1.5, 48))],
+        &settings,
+    )
+    .unwrap();
+    assert_eq!(world.hold.unwrap().followers, [None, None]);
+    let bodice = banded_skirt()
+        .replace(r#"{"endpoints": [2, 3], "label": "lower_interface"}"#, r#"{"endpoints": [2, 3]}"#)
+        .replace(
+            r#"{"endpoints": [0, 1]}, {"endpoints": [1, 2]}, {"endpoints": [2, 3]}, {"endpoints": [3, 0]}],
+            "translation": [0, 80"#,
+            r#"{"endpoints": [0, 1]}, {"endpoints": [1, 2]}, {"endpoints": [2, 3], "label": "lower_interface"}, {"endpoints": [3, 0]}],
+            "translation": [0, 80"#,
+        );
+    // Now the skirts' tops are the waist and the bands sit on them like a bodice.
+    let pattern = parse(&bodice, Path::new("bodice.json")).unwrap();
+    let labelled: Vec<&str> = (pattern.panels.iter())
+        .filter(|p| {
+            p.labels
+                .iter()
+                .any(|l| l.as_deref() == Some("lower_interface"))
+        })
+        .map(|p| p.name.as_str())
+        .collect();
+    assert_eq!(labelled, ["skirt_back", "skirt_front"]);
+    let world = garment_world(
+        &pattern,
+        vec![body_collider(common::cylinder(0.17, 0.5, 1.5, 48))],
+        &settings,
+    )
+    .unwrap();
+    assert_eq!(world.hold.unwrap().followers, [None; 4]);
+}

@@ -171,6 +171,10 @@ pub struct Hold {
     pub level: f64,
     /// The body's girth there when the level is its natural waist (`WaistHold::Auto`).
     pub girth: Option<f64>,
+    /// Per piece, the piece with held particles it follows, if it has none of its own but
+    /// hangs from one through seams that are not at the held edges (a skirt sewn to a held
+    /// waistband follows the band; a bodice sewn to a held skirt top does not follow it).
+    pub followers: Vec<Option<usize>>,
 }
 
 /// What a held waist did while sewing.
@@ -393,8 +397,11 @@ pub fn garment_world(
     } else {
         Vec::new()
     };
-    let hold = waist_hold(&assembled.waist, &body.mesh, settings.hold_waist);
+    let mut hold = waist_hold(&assembled.waist, &body.mesh, settings.hold_waist);
     let (mut model, x) = ClothModel::assemble(&assembled.pieces, Vec3::zeros());
+    if let Some(h) = &mut hold {
+        h.followers = followers(&model, &assembled.seams, &h.particles);
+    }
     model.add_springs(&seam_springs(&assembled));
     model.add_bends(&assembled.seam_bends);
     let fabric = &settings.assemble.fabric;
@@ -456,7 +463,45 @@ fn waist_hold(particles: &[u32], body: &TriMesh, how: WaistHold) -> Option<Hold>
         particles: particles.to_vec(),
         level,
         girth,
+        followers: Vec::new(),
     })
+}
+
+/// For each piece of `m` without `held` particles, the held piece it hangs from through the
+/// `seams` whose ends are not held (the lowest-numbered one if several), if any.
+fn followers(m: &ClothModel, seams: &[SeamPair], held: &[u32]) -> Vec<Option<usize>> {
+    let n = m.pieces.len();
+    let is_held = |i: u32| held.binary_search(&i).is_ok();
+    let mut parent: Vec<usize> = (0..n).collect();
+    fn root(parent: &mut [usize], mut i: usize) -> usize {
+        while parent[i] != i {
+            parent[i] = parent[parent[i]];
+            i = parent[i];
+        }
+        i
+    }
+    for s in seams.iter().filter(|s| !is_held(s.a) && !is_held(s.b)) {
+        let (a, b) = (piece_of(m, s.a as usize), piece_of(m, s.b as usize));
+        if let (Some(a), Some(b)) = (a, b) {
+            let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
+            parent[ra.max(rb)] = ra.min(rb);
+        }
+    }
+    let mut lead = vec![None; n];
+    let mut has_held = vec![false; n];
+    for &i in held {
+        if let Some(p) = piece_of(m, i as usize) {
+            has_held[p] = true;
+            let r = root(&mut parent, p);
+            lead[r] = Some(lead[r].map_or(p, |q: usize| q.min(p)));
+        }
+    }
+    (0..n)
+        .map(|p| {
+            let r = root(&mut parent, p);
+            lead[r].filter(|_| !has_held[p])
+        })
+        .collect()
 }
 
 /// Sets the constant of every seam spring, N/m.
@@ -589,6 +634,11 @@ fn pull_waist(world: &mut World, hold: &Hold, dt: f64) {
         if let Some(p) = piece_of(m, i) {
             shift[p].0.z += dz;
             shift[p].1 += 1;
+        }
+    }
+    for (p, f) in hold.followers.iter().enumerate() {
+        if let Some(q) = f {
+            shift[p] = shift[*q];
         }
     }
     follow(m, &shift, dt);
