@@ -1692,6 +1692,17 @@ fn a_panel_placed_through_the_body_is_moved_out_along_its_normal() {
     }
     let moved = (0..before.len()).filter(|&i| before[i] != after[i]).count();
     assert_eq!(moved, cleared.world.model.len() / 2);
+    // The same column open at both ends (its caps' faces dropped) has no inside: not cleared.
+    let mut open = column_through_the_back();
+    let z = |v: u32| open.positions[v as usize].z;
+    let sides: Vec<[u32; 3]> = (open.faces.iter())
+        .filter(|f| z(f[0]) != z(f[1]) || z(f[1]) != z(f[2]))
+        .copied()
+        .collect();
+    open.faces = sides;
+    let o = garment_world(&pattern, vec![body_collider(open)], &settings).unwrap();
+    assert!(!o.world.colliders[0].closed);
+    assert!(o.moved_out.is_empty());
 }
 
 #[test]

@@ -15,7 +15,8 @@
 //! its shape and its stitches; its seams then have a little further to close. A panel not
 //! clear within [`REACH`] stays where it was placed (a body that big is not the pattern's),
 //! and the report says so. A panel wholly outside the body is not moved: on the bodies a
-//! pattern was made for, nothing changes.
+//! pattern was made for, nothing changes. `garment::drape::garment_world` clears the panels
+//! of a closed body only: an open one (a seat's shell) has no inside to speak of.
 //!
 //! ```
 //! use drapekit::garment::clear::{clear_panels, STEP};

@@ -392,7 +392,9 @@ pub fn garment_world(
         return Err(GarmentError::FacingIn(facing));
     }
     let mut assembled = assemble(pattern, &settings.assemble).map_err(GarmentError::Assemble)?;
-    let moved_out = if settings.clear_panels {
+    // Only a closed body has an inside to be cleared of (an open one, a seat's shell, would
+    // also cost a generalized winding number per particle).
+    let moved_out = if settings.clear_panels && body.closed {
         clear_placed(pattern, &mut assembled, body, &settings.assemble.placement)
     } else {
         Vec::new()
