@@ -1733,7 +1733,7 @@ fn the_garment_command_says_which_panel_it_moved_out_and_keeps_it_when_asked() {
     let (out, err) = common::text(&o);
     assert!(
         out.contains("placed through the body: panel back (")
-            && out.contains("particles inside), moved 0.030 out along its normal"),
+            && out.contains("particles inside), moved 3.0 cm out along its normal"),
         "{out}{err}"
     );
 }

@@ -187,6 +187,9 @@ pub struct PanelMoved {
     /// Whether it was cleared of the body (within `garment::clear::REACH`); if not, it was
     /// sewn where the pattern puts it.
     pub cleared: bool,
+    /// `distance` in metres, for the summary.
+    #[serde(skip)]
+    pub distance_m: f64,
 }
 
 /// A sewn and draped garment as both `drapekit garment` and a scene's `[[garment]]` report it.
@@ -293,6 +296,7 @@ pub(super) fn outcome(
                 particles_inside: m.inside,
                 distance: m.distance * to_units,
                 cleared: m.cleared,
+                distance_m: m.distance,
             })
             .collect(),
         held_waist: g.hold,
@@ -863,7 +867,7 @@ fn hang_line(h: &crate::garment::hang::RingHang) -> String {
 pub(super) fn print_outcome(r: &GarmentOutcome, wall_seconds: f64) {
     for m in &r.panels_moved_out {
         let what = if m.cleared {
-            format!("moved {:.3} out along its normal", m.distance)
+            format!("moved {:.1} cm out along its normal", m.distance_m * 100.0)
         } else {
             format!(
                 "not clear within {} m along its normal: sewn where placed",
