@@ -380,9 +380,22 @@ pub fn garment_world(
     mut bodies: Vec<Collider>,
     settings: &GarmentSettings,
 ) -> Result<GarmentWorld, GarmentError> {
-    let Some(body) = bodies.first().filter(|b| !b.mesh.faces.is_empty()) else {
+    if bodies.first().is_none_or(|b| b.mesh.faces.is_empty()) {
         return Err(GarmentError::EmptyBody);
-    };
+    }
+    // The margins first: a collider builds its grid, with its margin, the first time it is
+    // asked (the panels' inside test below), and a grid built without the cloth's margin would
+    // list other faces to the contact.
+    let fabric = &settings.assemble.fabric;
+    let clearance = settings
+        .body_clearance
+        .unwrap_or(AUTO_CLEARANCE * settings.assemble.spacing);
+    for b in &mut bodies {
+        b.margin = fabric.thickness + clearance;
+        b.clearance = clearance;
+        b.friction = Some(b.friction.unwrap_or(settings.friction));
+    }
+    let body = &bodies[0];
     // The body's vertical axis in the pattern's own frame (y up) and units: the pattern's
     // placement undone.
     let centre = settings.assemble.placement.unapply(body.bbox.center());
@@ -406,15 +419,6 @@ pub fn garment_world(
     }
     model.add_springs(&seam_springs(&assembled));
     model.add_bends(&assembled.seam_bends);
-    let fabric = &settings.assemble.fabric;
-    let clearance = settings
-        .body_clearance
-        .unwrap_or(AUTO_CLEARANCE * settings.assemble.spacing);
-    for b in &mut bodies {
-        b.margin = fabric.thickness + clearance;
-        b.clearance = clearance;
-        b.friction = Some(b.friction.unwrap_or(settings.friction));
-    }
     let mut world = World::new(model, x, bodies, settings.solver.integrator);
     if let Some(opts) = settings.self_collision {
         let pairs: Vec<[u32; 2]> = assembled.seams.iter().map(|s| [s.a, s.b]).collect();
