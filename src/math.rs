@@ -175,3 +175,20 @@ pub fn mix(z: u64) -> u64 {
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
     z ^ (z >> 31)
 }
+
+/// The root of `i` in the union-find forest `parent` (`parent[r] == r` at a root), halving
+/// the path on the way.
+///
+/// ```
+/// let mut parent = vec![0, 0, 1, 3];
+/// assert_eq!(drapekit::math::uf_root(&mut parent, 2), 0);
+/// assert_eq!(parent[2], 0);
+/// assert_eq!(drapekit::math::uf_root(&mut parent, 3), 3);
+/// ```
+pub fn uf_root(parent: &mut [usize], mut i: usize) -> usize {
+    while parent[i] != i {
+        parent[i] = parent[parent[i]];
+        i = parent[i];
+    }
+    i
+}

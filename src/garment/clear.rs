@@ -78,13 +78,14 @@ fn count_inside(points: &[Point3], shift: Vec3, body: &Collider) -> usize {
 /// Moves each panel (`panels[k]`, its particles as placed) with a particle inside `body`
 /// along its unit outward normal `normals[k]` until none is (module docs); returns what it did
 /// for each such panel, in panel order.
-pub fn clear_panels(
-    panels: &mut [Vec<Point3>],
+pub fn clear_panels<P: AsMut<[Point3]>>(
+    panels: &mut [P],
     normals: &[Vec3],
     body: &Collider,
 ) -> Vec<MovedOut> {
     let mut out = Vec::new();
     for (index, (points, n)) in panels.iter_mut().zip(normals).enumerate() {
+        let points = points.as_mut();
         let first = count_inside(points, Vec3::zeros(), body);
         if first == 0 {
             continue;

@@ -443,12 +443,9 @@ fn clear_placed(
     placement: &Placement,
 ) -> Vec<MovedOut> {
     let normals = super::clear::outward_normals(pattern, placement);
-    let mut placed: Vec<Vec<Point3>> = (assembled.pieces.iter()).map(|p| p.3.clone()).collect();
-    let moved = super::clear::clear_panels(&mut placed, &normals, body);
-    for m in &moved {
-        assembled.pieces[m.index].3 = std::mem::take(&mut placed[m.index]);
-    }
-    moved
+    let mut placed: Vec<&mut Vec<Point3>> =
+        (assembled.pieces.iter_mut()).map(|p| &mut p.3).collect();
+    super::clear::clear_panels(&mut placed, &normals, body)
 }
 
 /// The hold of the waist `particles` on `body` by `how`: none when there are no such
@@ -479,13 +476,7 @@ fn followers(m: &ClothModel, seams: &[SeamPair], held: &[u32]) -> Vec<Option<usi
     let n = m.pieces.len();
     let is_held = |i: u32| held.binary_search(&i).is_ok();
     let mut parent: Vec<usize> = (0..n).collect();
-    fn root(parent: &mut [usize], mut i: usize) -> usize {
-        while parent[i] != i {
-            parent[i] = parent[parent[i]];
-            i = parent[i];
-        }
-        i
-    }
+    let root = crate::math::uf_root;
     for s in seams.iter().filter(|s| !is_held(s.a) && !is_held(s.b)) {
         let (a, b) = (piece_of(m, s.a as usize), piece_of(m, s.b as usize));
         if let (Some(a), Some(b)) = (a, b) {

@@ -50,7 +50,7 @@
 
 use super::spec::{EdgeRef, Pattern};
 use crate::geom::contains;
-use crate::math::{newell_normal, Point2, Point3, Vec3};
+use crate::math::{newell_normal, uf_root, Point2, Point3, Vec3};
 use crate::mesh::slice::{girth, slice};
 use crate::mesh::transform::{change_up_point, Up};
 use crate::mesh::TriMesh;
@@ -183,14 +183,6 @@ struct GEdge {
     right_wrong: bool,
 }
 
-fn find(parent: &mut [usize], mut i: usize) -> usize {
-    while parent[i] != i {
-        parent[i] = parent[parent[i]];
-        i = parent[i];
-    }
-    i
-}
-
 /// A panel edge's samples placed in drapekit's frame (m, z up), from its start to its end.
 fn placed(pattern: &Pattern, e: &EdgeRef) -> Vec<Point3> {
     let p = &pattern.panels[e.panel];
@@ -286,7 +278,7 @@ fn rings(pattern: &Pattern) -> (Vec<GEdge>, Vec<(RingKind, Walk)>) {
             [(a0, b1), (a1, b0)]
         };
         for (x, y) in pairs {
-            let (x, y) = (find(&mut parent, x), find(&mut parent, y));
+            let (x, y) = (uf_root(&mut parent, x), uf_root(&mut parent, y));
             parent[x] = y;
         }
         stitched[st.a.panel][st.a.edge] = true;
@@ -305,8 +297,8 @@ fn rings(pattern: &Pattern) -> (Vec<GEdge>, Vec<(RingKind, Walk)>) {
             seam.push(edges.len());
         }
         edges.push(GEdge {
-            from: find(&mut parent, a0),
-            to: find(&mut parent, a1),
+            from: uf_root(&mut parent, a0),
+            to: uf_root(&mut parent, a1),
             sides: vec![st.a, st.b],
             right_wrong: st.right_wrong,
         });
@@ -319,8 +311,8 @@ fn rings(pattern: &Pattern) -> (Vec<GEdge>, Vec<(RingKind, Walk)>) {
                 let (s, t) = ends(&e);
                 open.push(edges.len());
                 edges.push(GEdge {
-                    from: find(&mut parent, s),
-                    to: find(&mut parent, t),
+                    from: uf_root(&mut parent, s),
+                    to: uf_root(&mut parent, t),
                     sides: vec![e],
                     right_wrong: false,
                 });

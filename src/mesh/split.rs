@@ -34,15 +34,7 @@
 
 use super::topology::{is_index_degenerate, Topology, BOUNDARY, NON_MANIFOLD};
 use super::TriMesh;
-
-/// The root of `i` in `parent`, halving the path.
-fn root(parent: &mut [usize], mut i: usize) -> usize {
-    while parent[i] != i {
-        parent[i] = parent[parent[i]];
-        i = parent[i];
-    }
-    i
-}
+use crate::math::uf_root as root;
 
 /// The fans of vertex `v`: for each face of its star (`topo.vertex_faces(v)`, in order), the
 /// index of its fan, fans numbered from 0 in order of their first face; one fan when an edge
