@@ -8,6 +8,8 @@
 //! * `contains`: the even-odd rule (a horizontal ray's crossings);
 //! * `segments_meet`: whether two segments cross or touch, from the signs of `orient2d`;
 //! * `segment_distance`: the distance to the segment's nearest point;
+//! * `segment_meets_box`: whether a segment meets a closed axis-aligned box (Liang and
+//!   Barsky's clipping: the parameter range `[0, 1]` cut by each slab `lo <= a + t d <= hi`);
 //! * [`crossing::self_crossing`]: two non-adjacent edges of a polygon that meet, in
 //!   O(n log n) (a sweep).
 //!
@@ -66,6 +68,42 @@ pub fn segment_distance(p: &Point2, a: &Point2, b: &Point2) -> f64 {
         0.0
     };
     (p - (a + d * t)).norm()
+}
+
+/// Whether the segment `a b` meets the closed box `lo..hi` (module docs).
+///
+/// ```
+/// use drapekit::geom::segment_meets_box;
+/// use drapekit::math::Point2;
+/// let (lo, hi) = (Point2::new(0.0, 0.0), Point2::new(1.0, 1.0));
+/// let p = |x, y| Point2::new(x, y);
+/// // Through the box without an end inside it, and along a side.
+/// assert!(segment_meets_box(&p(-1.0, 0.5), &p(2.0, 0.6), &lo, &hi));
+/// assert!(segment_meets_box(&p(1.0, -1.0), &p(1.0, 2.0), &lo, &hi));
+/// // Across the corner (1, 1) just inside it, and just beside it.
+/// assert!(segment_meets_box(&p(1.9, 0.0), &p(0.0, 1.9), &lo, &hi));
+/// assert!(!segment_meets_box(&p(2.1, 0.0), &p(0.0, 2.1), &lo, &hi));
+/// // Short of the box.
+/// assert!(!segment_meets_box(&p(-1.0, 0.5), &p(-0.1, 0.5), &lo, &hi));
+/// ```
+pub fn segment_meets_box(a: &Point2, b: &Point2, lo: &Point2, hi: &Point2) -> bool {
+    let d = b - a;
+    let (mut t0, mut t1) = (0.0_f64, 1.0_f64);
+    for k in 0..2 {
+        if d[k] == 0.0 {
+            if a[k] < lo[k] || a[k] > hi[k] {
+                return false;
+            }
+            continue;
+        }
+        let (u, v) = ((lo[k] - a[k]) / d[k], (hi[k] - a[k]) / d[k]);
+        t0 = t0.max(u.min(v));
+        t1 = t1.min(u.max(v));
+        if t0 > t1 {
+            return false;
+        }
+    }
+    true
 }
 
 /// Whether segments (a, b) and (c, d) cross or touch, beyond shared endpoints.

@@ -2,12 +2,17 @@
 //!
 //! **Particles.** The warp runs along x, the weft along y. A square grid of spacing `h` covers the
 //! outline; a grid cell is *full* when its four corners are inside the outline and at least
-//! [`CLEARANCE`]`* h` from it, and the corners of full cells are particles. The outline is
+//! [`CLEARANCE`]`* h` from it and no edge of the outline meets it (a thin dart or slit can pass
+//! between four such corners), and the corners of full cells are particles. The outline is
 //! sampled at most `h` apart, its corners included, so the shape holds.
 //!
-//! **Triangles.** Each full cell is two triangles. The band between the outline and the full
-//! cells is a polygon with holes (the outline, and the boundaries of the blocks of full cells);
-//! it is bridged and ear-clipped (`mesh::polygon::triangulate_with_holes`), and every band edge
+//! **Triangles.** Each full cell is two triangles. Full cells that touch at a corner only are
+//! parted first (one of the two goes): the boundaries of their blocks would pinch there. The
+//! band between the outline and the full cells is then a set of polygons with holes: the
+//! outline's ring with the outer boundaries of the blocks and the holes' edges inside it, and
+//! the inner boundary of a block round a hole with what lies inside that. Each is bridged and
+//! ear-clipped (`mesh::polygon::triangulate_with_holes`); a triangle turned over is refused
+//! (`PatternError::TurnedOver`) rather than given a negative mass. Every band edge
 //! longer than [`CHORD`] spacings is then flipped towards Delaunay (`mesh::delaunay`): ear
 //! clipping fans from one grid corner to many outline samples where the outline runs along a
 //! staircase of cells (the hoody's armhole had fans of 7.5 cm at 1 cm), and a chord that long
@@ -232,6 +237,10 @@ pub enum PatternError {
     /// A hole that is not a clean outline inside the piece's, apart from the others.
     #[error("hole {hole} {reason}")]
     Hole { hole: usize, reason: String },
+    /// A triangle of the band turned over (its particles would weigh less than nothing): the
+    /// outline or a hole is too thin there for the spacing.
+    #[error("the triangulation turned a triangle over near ({x:.4}, {y:.4}) m: the outline is too thin there for spacing {spacing} m; use a finer spacing or widen the cut")]
+    TurnedOver { x: f64, y: f64, spacing: f64 },
     /// A pin away from every particle.
     #[error("pin {index} at ({x}, {y}) is {d} from the nearest particle; pins must be outline points or grid crossings", d = crate::math::short(*distance))]
     Pin {
@@ -305,6 +314,138 @@ fn sample_loop(poly: &[Point2], h: f64, flat: &mut Vec<Point2>) -> Vec<u32> {
         }
     }
     out
+}
+
+/// Drops full cells (row after row, `ni` by `nj`) until no two touch at a corner only: where
+/// they do, the boundaries of their blocks pinch at that corner, the band round them is not a
+/// simple polygon, and its ear clipping turns triangles over. Of the two cells, the one with
+/// fewer full neighbours across a side goes (the upper one on a tie).
+fn unpinch(full: &mut [bool], ni: usize, nj: usize) {
+    let at = |f: &[bool], i: usize, j: usize| i < ni && j < nj && f[j * ni + i];
+    let sides = |f: &[bool], i: usize, j: usize| {
+        let mut n = at(f, i + 1, j) as u32 + at(f, i, j + 1) as u32;
+        n += (i > 0 && at(f, i - 1, j)) as u32 + (j > 0 && at(f, i, j - 1)) as u32;
+        n
+    };
+    loop {
+        let mut changed = false;
+        for j in 0..nj.saturating_sub(1) {
+            for i in 0..ni.saturating_sub(1) {
+                let [a, b, c, d] =
+                    [(i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1)].map(|(x, y)| at(full, x, y));
+                // (a, d) or (b, c) full, the other two empty.
+                let pair = match (a, b, c, d) {
+                    (true, false, false, true) => [(i, j), (i + 1, j + 1)],
+                    (false, true, true, false) => [(i + 1, j), (i, j + 1)],
+                    _ => continue,
+                };
+                let drop = if sides(full, pair[0].0, pair[0].1) < sides(full, pair[1].0, pair[1].1)
+                {
+                    pair[0]
+                } else {
+                    pair[1]
+                };
+                full[drop.1 * ni + drop.0] = false;
+                changed = true;
+            }
+        }
+        if !changed {
+            break;
+        }
+    }
+}
+
+/// The plane points as points in z = 0.
+fn pos3(flat: &[Point2]) -> Vec<Point3> {
+    flat.iter().map(|p| Point3::new(p.x, p.y, 0.0)).collect()
+}
+
+/// The band's regions, each a counter-clockwise ring with the clockwise loops inside it. The
+/// band is the outline's ring less the blocks of full cells and the holes; a block with a hole
+/// in it has an inner boundary (counter-clockwise, once reversed like the others), which rings
+/// a region of its own round the hole, apart from the outline's. Each clockwise loop goes to
+/// the smallest counter-clockwise ring holding its first corner (the loops do not cross).
+fn band_regions(
+    flat: &[Point2],
+    outer: Vec<u32>,
+    loops: Vec<Vec<u32>>,
+) -> Vec<(Vec<u32>, Vec<Vec<u32>>)> {
+    let points = |lp: &[u32]| lp.iter().map(|&v| flat[v as usize]).collect::<Vec<_>>();
+    let area = |lp: &[u32]| crate::geom::signed_area2(&points(lp));
+    let (rings, cw): (Vec<Vec<u32>>, Vec<Vec<u32>>) = std::iter::once(outer)
+        .chain(loops)
+        .partition(|lp| area(lp) > 0.0);
+    let mut regions: Vec<(Vec<u32>, Vec<Vec<u32>>)> =
+        rings.into_iter().map(|r| (r, Vec::new())).collect();
+    let sizes: Vec<f64> = regions.iter().map(|r| area(&r.0)).collect();
+    for lp in cw {
+        let q = flat[lp[0] as usize];
+        let home = (0..regions.len())
+            .filter(|&k| crate::geom::contains(&points(&regions[k].0), &q))
+            .min_by(|&a, &b| sizes[a].total_cmp(&sizes[b]))
+            .unwrap_or(0);
+        regions[home].1.push(lp);
+    }
+    regions
+}
+
+/// The first triangle of `tris` (corners in `flat`) turned clockwise, as an error: the ear
+/// clipping of a band that is not a simple polygon (`crossed_cells` keeps the cells off the
+/// outline; this is the guard behind it, so a negative mass never reaches the solver).
+fn turned_over(flat: &[Point2], tris: &[[u32; 3]], spacing: f64) -> Result<(), PatternError> {
+    let corners = |t: &[u32; 3]| t.map(|v| flat[v as usize]);
+    match tris
+        .iter()
+        .map(corners)
+        .find(|[a, b, c]| orient2d(a, b, c) < 0.0)
+    {
+        Some([a, b, c]) => Err(PatternError::TurnedOver {
+            x: (a.x + b.x + c.x) / 3.0,
+            y: (a.y + b.y + c.y) / 3.0,
+            spacing,
+        }),
+        None => Ok(()),
+    }
+}
+
+/// The grid's cells (row after row, `ni` by `nj` corners, corner `(i, j)` at `node(i, j)`)
+/// whose closed square meets a segment of one of `loops`. A thin dart or slit can pass between
+/// four corners that are all inside the outline and clear of it: a cell over it would cover
+/// the cut, and the band round it would not be a simple polygon (its ear clipping left
+/// triangles turned over, and corners with a negative mass).
+fn crossed_cells(
+    loops: &[&[Point2]],
+    node: &dyn Fn(usize, usize) -> Point2,
+    h: f64,
+    ni: usize,
+    nj: usize,
+) -> Vec<bool> {
+    let mut crossed = vec![false; ni * nj];
+    if ni < 2 || nj < 2 {
+        return crossed;
+    }
+    let origin = node(0, 0);
+    // The cells a coordinate range covers, one more on each side for rounding.
+    let span = |lo: f64, hi: f64, o: f64, n: usize| {
+        let at = |v: f64| ((v - o) / h).floor().max(0.0) as usize;
+        (at(lo).saturating_sub(1), (at(hi) + 1).min(n - 2))
+    };
+    for lp in loops {
+        for e in 0..lp.len() {
+            let (a, b) = (lp[e], lp[(e + 1) % lp.len()]);
+            let (i0, i1) = span(a.x.min(b.x), a.x.max(b.x), origin.x, ni);
+            let (j0, j1) = span(a.y.min(b.y), a.y.max(b.y), origin.y, nj);
+            for j in j0..=j1 {
+                for i in i0..=i1 {
+                    let (lo, hi) = (node(i, j), node(i + 1, j + 1));
+                    if crate::geom::segment_meets_box(&a, &b, &lo, &hi) {
+                        crossed[j * ni + i] = true;
+                    }
+                }
+            }
+        }
+    }
+    crossed
 }
 
 fn inside(poly: &[Point2], q: &Point2) -> bool {
@@ -434,14 +575,23 @@ pub fn build_with_holes(
                     .all(|c| distance_to_outline(c, &q) >= CLEARANCE * h)
         })
         .collect();
-    let full = |i: usize, j: usize| {
-        i + 1 < ni
-            && j + 1 < nj
-            && valid[j * ni + i]
-            && valid[j * ni + i + 1]
-            && valid[(j + 1) * ni + i]
-            && valid[(j + 1) * ni + i + 1]
-    };
+    let mut loops: Vec<&[Point2]> = vec![&poly];
+    loops.extend(cut.iter().map(|c| c.as_slice()));
+    let crossed = crossed_cells(&loops, &node, h, ni, nj);
+    let mut full_cells: Vec<bool> = (0..nj)
+        .flat_map(|j| (0..ni).map(move |i| (i, j)))
+        .map(|(i, j)| {
+            i + 1 < ni
+                && j + 1 < nj
+                && !crossed[j * ni + i]
+                && valid[j * ni + i]
+                && valid[j * ni + i + 1]
+                && valid[(j + 1) * ni + i]
+                && valid[(j + 1) * ni + i + 1]
+        })
+        .collect();
+    unpinch(&mut full_cells, ni, nj);
+    let full = |i: usize, j: usize| full_cells[j * ni + i];
     let mut kept = vec![false; ni * nj];
     for j in 0..nj {
         for i in 0..ni {
@@ -545,9 +695,12 @@ pub fn build_with_holes(
         holes.push(lp);
     }
     holes.extend(cut_loops);
-    let pos3: Vec<Point3> = flat.iter().map(|p| Point3::new(p.x, p.y, 0.0)).collect();
-    let mut band = triangulate_with_holes(&pos3, &outer, &holes);
+    let mut band = Vec::new();
+    for (ring, inner) in band_regions(&flat, outer.clone(), holes) {
+        band.extend(triangulate_with_holes(&pos3(&flat), &ring, &inner));
+    }
     crate::mesh::delaunay::flip_to_delaunay(&flat, &mut band, CHORD * h);
+    turned_over(&flat, &band, h)?;
     triangles.extend_from_slice(&band);
 
     // Masses.
@@ -755,6 +908,10 @@ mod tests {
             &Pins::default(),
         )
         .unwrap();
+        // The band round the hole is a region of its own (the block of cells round it has an
+        // inner boundary): nothing turned over, nothing weighs less than nothing.
+        assert!(areas2(&p).iter().all(|&a| a > 0.0));
+        assert!(p.mass.iter().all(|&m| m > 0.0));
         let hole_area = 0.5 * crate::geom::signed_area2(&hole);
         assert!((p.area - (1.0 - hole_area)).abs() < 1e-9, "{}", p.area);
         let mass: f64 = p.mass.iter().sum();
@@ -871,6 +1028,107 @@ mod tests {
             (0, 1, 1)
         );
         assert_eq!(d.euler_characteristic, 1);
+    }
+
+    /// Twice the signed area of each triangle of `p`.
+    fn areas2(p: &Piece) -> Vec<f64> {
+        let at = |v: u32| p.flat[v as usize];
+        (p.triangles.iter())
+            .map(|t| orient2d(&at(t[0]), &at(t[1]), &at(t[2])))
+            .collect()
+    }
+
+    #[test]
+    fn a_thin_slit_between_grid_corners_is_not_covered_by_cells() {
+        // A 10 cm square cut by a slit 0.2 mm wide from its right side to x = 3 cm, along
+        // y = 4.5 cm: halfway between two rows of grid corners, 5 mm from each, so every corner
+        // is inside and clear of the outline (0.4 spacings), and the cells between the rows
+        // would lie over the slit.
+        let (w, y) = (1e-4, 0.045);
+        let outline = vec![
+            Point2::new(0.0, 0.0),
+            Point2::new(0.1, 0.0),
+            Point2::new(0.1, y - w),
+            Point2::new(0.03, y - w),
+            Point2::new(0.03, y + w),
+            Point2::new(0.1, y + w),
+            Point2::new(0.1, 0.1),
+            Point2::new(0.0, 0.1),
+        ];
+        let p = build(&outline, 0.01, &Fabric::cotton(), &Pins::default()).unwrap();
+        let a = areas2(&p);
+        assert!(a.iter().all(|&a| a > 0.0), "a triangle turned over");
+        assert!(p.mass.iter().all(|&m| m > 0.0));
+        // No overlap: the triangles add up to the outline's area, the slit left out.
+        let area = 0.01 - 0.07 * 2.0 * w;
+        let sum: f64 = a.iter().sum::<f64>() * 0.5;
+        assert!((sum - area).abs() < 1e-12 * area.max(1.0), "{sum} {area}");
+        // No triangle lies over the slit.
+        for t in &p.triangles {
+            let c = t.iter().fold(Point2::origin(), |c, &v| {
+                c + p.flat[v as usize].coords / 3.0
+            });
+            assert!(crate::geom::contains(&outline, &c), "{c:?}");
+        }
+    }
+
+    #[test]
+    fn cells_that_touch_at_a_corner_only_are_parted() {
+        // A square from -1 to 3 with two notches to (2, 0) and (0, 2) at spacing 1: the grid
+        // corners inside and clear of the outline are (0..=2)^2 without those two, so the
+        // cells (0, 0) and (1, 1) are full and touch at (1, 1) only. One goes.
+        let p = |x, y| Point2::new(x, y);
+        let outline = [
+            p(-1.0, -1.0),
+            p(1.8, -1.0),
+            p(2.0, 0.0),
+            p(2.2, -1.0),
+            p(3.0, -1.0),
+            p(3.0, 3.0),
+            p(-1.0, 3.0),
+            p(-1.0, 2.2),
+            p(0.0, 2.0),
+            p(-1.0, 1.8),
+        ];
+        let piece = build(&outline, 1.0, &Fabric::cotton(), &Pins::default()).unwrap();
+        assert_eq!(piece.grid_particles, 4, "one cell of four corners");
+        assert!(areas2(&piece).iter().all(|&a| a > 0.0));
+        let area = 16.0 - 2.0 * 0.4 * 1.0 / 2.0;
+        assert!((piece.area - area).abs() < 1e-12, "{}", piece.area);
+        // On a grid of cells: the diagonal pair and the anti-diagonal pair lose one cell
+        // each; a 2 x 2 block and a row touching along sides stay.
+        let mut diag = vec![true, false, false, true];
+        unpinch(&mut diag, 2, 2);
+        assert_eq!(diag.iter().filter(|&&f| f).count(), 1);
+        let mut anti = vec![false, true, true, false];
+        unpinch(&mut anti, 2, 2);
+        assert_eq!(anti.iter().filter(|&&f| f).count(), 1);
+        let mut block = vec![true; 4];
+        unpinch(&mut block, 2, 2);
+        assert_eq!(block, vec![true; 4]);
+        // A diagonal staircase of three cells, each step a pinch: the loop ends with no two
+        // cells touching at a corner only.
+        let mut stairs = vec![true, false, false, false, true, false, false, false, true];
+        unpinch(&mut stairs, 3, 3);
+        for j in 0..2 {
+            for i in 0..2 {
+                let f = |x: usize, y: usize| stairs[y * 3 + x];
+                let pinch = (f(i, j), f(i + 1, j), f(i, j + 1), f(i + 1, j + 1));
+                assert!(pinch != (true, false, false, true) && pinch != (false, true, true, false));
+            }
+        }
+    }
+
+    #[test]
+    fn a_turned_over_triangle_is_refused_where_it_is() {
+        let flat = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)].map(|(x, y)| Point2::new(x, y));
+        assert!(turned_over(&flat, &[[0, 1, 2], [1, 3, 2]], 0.5).is_ok());
+        match turned_over(&flat, &[[0, 1, 2], [1, 2, 3]], 0.5) {
+            Err(PatternError::TurnedOver { x, y, spacing }) => {
+                assert_eq!((x, y, spacing), (2.0 / 3.0, 2.0 / 3.0, 0.5));
+            }
+            other => panic!("{other:?}"),
+        }
     }
 
     #[test]
