@@ -241,6 +241,10 @@ pub enum PatternError {
     /// outline or a hole is too thin there for the spacing.
     #[error("the triangulation turned a triangle over near ({x:.4}, {y:.4}) m: the outline is too thin there for spacing {spacing} m; use a finer spacing or widen the cut")]
     TurnedOver { x: f64, y: f64, spacing: f64 },
+    /// A particle in no triangle of positive area: it would weigh nothing, and the solver's
+    /// matrix would not be positive definite.
+    #[error("the particle at ({x:.4}, {y:.4}) m is in no triangle of positive area; the outline is degenerate there")]
+    Massless { x: f64, y: f64 },
     /// A pin away from every particle.
     #[error("pin {index} at ({x}, {y}) is {d} from the nearest particle; pins must be outline points or grid crossings", d = crate::math::short(*distance))]
     Pin {
@@ -403,6 +407,17 @@ fn turned_over(flat: &[Point2], tris: &[[u32; 3]], spacing: f64) -> Result<(), P
             x: (a.x + b.x + c.x) / 3.0,
             y: (a.y + b.y + c.y) / 3.0,
             spacing,
+        }),
+        None => Ok(()),
+    }
+}
+
+/// The first particle of `mass` that weighs nothing (or less), at `flat`, as an error.
+fn massless(flat: &[Point2], mass: &[f64]) -> Result<(), PatternError> {
+    match mass.iter().position(|&m| m <= 0.0 || m.is_nan()) {
+        Some(i) => Err(PatternError::Massless {
+            x: flat[i].x,
+            y: flat[i].y,
         }),
         None => Ok(()),
     }
@@ -718,6 +733,7 @@ pub fn build_with_holes(
             mass[v as usize] += fabric.density * a / 3.0;
         }
     }
+    massless(&flat, &mass)?;
 
     // Springs.
     let mut springs: Vec<Spring> = Vec::new();
@@ -1115,6 +1131,18 @@ mod tests {
                 let f = |x: usize, y: usize| stairs[y * 3 + x];
                 let pinch = (f(i, j), f(i + 1, j), f(i, j + 1), f(i + 1, j + 1));
                 assert!(pinch != (true, false, false, true) && pinch != (false, true, true, false));
+            }
+        }
+    }
+
+    #[test]
+    fn a_particle_that_weighs_nothing_is_refused_where_it_is() {
+        let flat = [Point2::new(0.0, 0.0), Point2::new(0.25, 0.5)];
+        assert!(massless(&flat, &[1e-6, 2e-6]).is_ok());
+        for bad in [0.0, -1e-9, f64::NAN] {
+            match massless(&flat, &[1e-6, bad]) {
+                Err(PatternError::Massless { x, y }) => assert_eq!((x, y), (0.25, 0.5)),
+                other => panic!("{other:?}"),
             }
         }
     }
