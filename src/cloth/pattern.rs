@@ -381,11 +381,15 @@ fn band_regions(
         .partition(|lp| area(lp) > 0.0);
     let mut regions: Vec<(Vec<u32>, Vec<Vec<u32>>)> =
         rings.into_iter().map(|r| (r, Vec::new())).collect();
-    let sizes: Vec<f64> = regions.iter().map(|r| area(&r.0)).collect();
+    let shapes: Vec<Vec<Point2>> = regions.iter().map(|r| points(&r.0)).collect();
+    let sizes: Vec<f64> = shapes
+        .iter()
+        .map(|p| crate::geom::signed_area2(p))
+        .collect();
     for lp in cw {
         let q = flat[lp[0] as usize];
         let home = (0..regions.len())
-            .filter(|&k| crate::geom::contains(&points(&regions[k].0), &q))
+            .filter(|&k| crate::geom::contains(&shapes[k], &q))
             .min_by(|&a, &b| sizes[a].total_cmp(&sizes[b]))
             .unwrap_or(0);
         regions[home].1.push(lp);
@@ -710,9 +714,9 @@ pub fn build_with_holes(
         holes.push(lp);
     }
     holes.extend(cut_loops);
-    let mut band = Vec::new();
+    let (mut band, positions) = (Vec::new(), pos3(&flat));
     for (ring, inner) in band_regions(&flat, outer.clone(), holes) {
-        band.extend(triangulate_with_holes(&pos3(&flat), &ring, &inner));
+        band.extend(triangulate_with_holes(&positions, &ring, &inner));
     }
     crate::mesh::delaunay::flip_to_delaunay(&flat, &mut band, CHORD * h);
     turned_over(&flat, &band, h)?;
