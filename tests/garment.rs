@@ -604,6 +604,23 @@ fn edge_labels_are_read_and_their_particles_listed_as_the_waist() {
     assert!(assemble(&plain, &opts).unwrap().waist.is_empty());
 }
 
+/// `bench garment` on the real data with 0.05 s of drape and `extra`, its JSON rows.
+fn bench_garment(root: &Path, extra: &[&str]) -> Vec<serde_json::Value> {
+    let root = root.to_str().unwrap();
+    let mut args = vec![
+        "bench",
+        "garment",
+        "--realdata",
+        root,
+        "--settle-max",
+        "0.05",
+    ];
+    args.extend_from_slice(extra);
+    args.push("--json");
+    let (rows, _) = common::run_json(&args);
+    rows.as_array().expect("rows").clone()
+}
+
 #[test]
 fn bench_garment_holds_dress_pencils_waist_at_mean_alls_natural_waist() {
     // `bench garment --hold-waist auto` at 10 cm, 0.05 s of drape: the skirt's waist edges are
@@ -612,22 +629,17 @@ fn bench_garment_holds_dress_pencils_waist_at_mean_alls_natural_waist() {
     let Some(root) = common::realdata() else {
         return;
     };
-    let (rows, _) = common::run_json(&[
-        "bench",
-        "garment",
-        "--realdata",
-        root.to_str().unwrap(),
-        "--only",
-        "dress_pencil",
-        "--spacing",
-        "0.1",
-        "--settle-max",
-        "0.05",
-        "--hold-waist",
-        "auto",
-        "--json",
-    ]);
-    let rows = rows.as_array().unwrap();
+    let rows = bench_garment(
+        &root,
+        &[
+            "--only",
+            "dress_pencil",
+            "--spacing",
+            "0.1",
+            "--hold-waist",
+            "auto",
+        ],
+    );
     assert_eq!(rows.len(), 2, "mean_all and mean_female");
     for r in rows {
         let h = &r["held_waist"];
@@ -654,21 +666,9 @@ fn bench_garment_measures_the_rim_hinges_both_ways() {
         return;
     };
     let run = |extra: &[&str]| {
-        let mut args = vec![
-            "bench",
-            "garment",
-            "--realdata",
-            root.to_str().unwrap(),
-            "--only",
-            "hoody",
-            "--spacing",
-            "0.1",
-            "--settle-max",
-            "0.05",
-            "--json",
-        ];
+        let mut args = vec!["--only", "hoody", "--spacing", "0.1"];
         args.extend_from_slice(extra);
-        common::run_json(&args).0[0].clone()
+        bench_garment(&root, &args)[0].clone()
     };
     let (with, without) = (run(&[]), run(&["--no-rim-bending"]));
     assert_eq!(with["rim_bending"], true);
@@ -677,6 +677,64 @@ fn bench_garment_measures_the_rim_hinges_both_ways() {
     assert_ne!(
         with["max_strain"], without["max_strain"],
         "{with} {without}"
+    );
+}
+
+#[test]
+fn bench_garment_compares_each_spacing_with_the_finest() {
+    // Two spacings given coarse-last, two seeds: the rows run coarse to fine, each row's
+    // `against_finest` is its rings against the finest spacing's row of its seed (a perturbed
+    // row at the finest spacing against the unperturbed one), recomputed here from the rings.
+    let Some(root) = common::realdata() else {
+        return;
+    };
+    let rows = bench_garment(
+        &root,
+        &["--only", "hoody", "--spacing", "0.08,0.1", "--seeds", "2"],
+    );
+    let spacing: Vec<f64> = rows
+        .iter()
+        .map(|r| r["spacing"].as_f64().unwrap())
+        .collect();
+    assert_eq!(spacing, [0.1, 0.1, 0.08, 0.08]);
+    assert!(rows[2]["particles"].as_u64() > rows[0]["particles"].as_u64());
+    assert!(rows[2]["against_finest"].is_null(), "the reference itself");
+    let rings = |r: &serde_json::Value| r["rings"].as_array().unwrap().clone();
+    let largest = |a: &serde_json::Value, b: &serde_json::Value| {
+        let (a, b) = (rings(a), rings(b));
+        assert!(!a.is_empty() && a.len() == b.len());
+        let f = |r: &serde_json::Value, k: &str| r[k].as_f64().unwrap();
+        let strain = |r: &serde_json::Value| f(r, "length_m") / f(r, "rest_length_m") - 1.0;
+        let pairs = a.iter().zip(&b);
+        let dz = pairs
+            .clone()
+            .map(|(r, s)| (f(r, "height_mean_m") - f(s, "height_mean_m")).abs());
+        let ds = pairs.map(|(r, s)| (strain(r) - strain(s)).abs());
+        (dz.fold(0.0, f64::max), ds.fold(0.0, f64::max))
+    };
+    for (row, reference) in [(0, 2), (1, 3), (3, 2)] {
+        let d = &rows[row]["against_finest"];
+        let (dz, ds) = largest(&rows[row], &rows[reference]);
+        // The report's numbers carry 15 significant digits.
+        let near = |v: &serde_json::Value, x: f64| (v.as_f64().unwrap() - x).abs() <= 1e-12 * x;
+        assert!(near(&d["height_m"], dz), "row {row}: {d} against {dz}");
+        assert!(near(&d["strain"], ds), "row {row}: {d} against {ds}");
+        assert!(
+            dz > 0.0 && ds > 0.0,
+            "row {row} differs from its reference: {d}"
+        );
+    }
+}
+
+#[test]
+fn bench_garment_refuses_every_bad_spacing_by_name() {
+    // Before any work (no real data is read): each bad value is named.
+    let o = common::run(&["bench", "garment", "--spacing", "0.02,0.3,nan,0.001"]);
+    let (_, stderr) = common::text(&o);
+    assert!(!o.status.success());
+    assert!(
+        stderr.contains("--spacing 0.3,NaN,0.001: each must be 0.002 to 0.1 m"),
+        "{stderr}"
     );
 }
 

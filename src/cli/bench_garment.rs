@@ -9,11 +9,15 @@
 //! seconds to minutes): quote it with the load average. With `--seeds N`, each garment also
 //! runs from N - 1 starts perturbed by a tenth of a micron (`garment::perturb`), and a line
 //! gives each measure's median and range: the spread that chance alone makes, against which a
-//! change to the simulator is judged.
+//! change to the simulator is judged. With several `--spacing`s (`0.03,0.02,0.01`), each
+//! garment runs at each, and a line per coarser spacing says what it costs in shape against
+//! the finest (`garment::hang::compare`: the largest difference of a ring's mean height and
+//! of its strain along itself) and what it saves in wall time.
 
 use super::garment::{judge, read_body};
 use crate::cloth::fabric::Fabric;
 use crate::garment::drape::{self as gd, GarmentSettings};
+use crate::garment::hang::{compare, HangDifference, RingHang};
 use anyhow::Context;
 use serde::Serialize;
 use std::path::PathBuf;
@@ -29,9 +33,10 @@ pub struct GarmentBench {
     /// Only the runs whose pattern or body name contains this.
     #[arg(long)]
     pub only: Option<String>,
-    /// Particle spacing, m.
-    #[arg(long, default_value_t = 0.01)]
-    pub spacing: f64,
+    /// Particle spacing, m; several, comma-separated (`0.03,0.02,0.01`): each garment at each,
+    /// compared with the finest.
+    #[arg(long, default_value = "0.01", value_delimiter = ',', num_args = 1..)]
+    pub spacing: Vec<f64>,
     /// Longest drape after sewing, simulated s.
     #[arg(long, default_value_t = 8.0)]
     pub settle_max: f64,
@@ -71,6 +76,8 @@ pub struct GarmentRow {
     pub pattern: String,
     /// The body's name.
     pub body: String,
+    /// Particle spacing, m.
+    pub spacing: f64,
     /// Particles of the garment.
     pub particles: usize,
     /// Sewing: simulated s, and wall s.
@@ -99,6 +106,11 @@ pub struct GarmentRow {
     pub self_crossing_edges: usize,
     pub max_strain: f64,
     pub seam_gap_max_mm: f64,
+    /// How its rings hang (`garment::hang`).
+    pub rings: Vec<RingHang>,
+    /// Against the same garment and seed at the finest spacing (several `--spacing`s), or
+    /// `null`.
+    pub against_finest: Option<HangDifference>,
 }
 
 /// Runs the benchmark.
@@ -110,7 +122,7 @@ pub fn run(a: GarmentBench) -> anyhow::Result<()> {
     let fabric = Fabric::preset(&a.fabric).with_context(|| format!("--fabric {}", a.fabric))?;
     super::garment::check_stage("--settle-max", a.settle_max)?;
     let mut settings = GarmentSettings::default();
-    settings.assemble.spacing = a.spacing;
+    let spacings = check_spacings(&a.spacing)?;
     settings.assemble.fabric = fabric;
     settings.settle_max = a.settle_max;
     settings.hold_waist = super::garment::hold_waist(&a.hold_waist)?;
@@ -126,16 +138,26 @@ pub fn run(a: GarmentBench) -> anyhow::Result<()> {
         let pattern = crate::garment::read(&pattern_path)?;
         let body = read_body(&dir.join(format!("bodies/{b}.obj")), "auto", &pattern)?.mesh;
         let first = rows.len();
-        for seed in (0..a.seeds).map(|k| (k > 0).then_some(k)) {
-            settings.perturb = seed;
-            let row = run_one(&pattern, &body, (p, b), &settings)?;
-            if !a.json {
-                print_row(&row);
+        for &h in &spacings {
+            settings.assemble.spacing = h;
+            let at = rows.len();
+            for seed in (0..a.seeds).map(|k| (k > 0).then_some(k)) {
+                settings.perturb = seed;
+                let row = run_one(&pattern, &body, (p, b), &settings)?;
+                if !a.json {
+                    print_row(&row, spacings.len() > 1);
+                }
+                rows.push(row);
             }
-            rows.push(row);
+            if a.seeds > 1 && !a.json {
+                print_spread(&rows[at..]);
+            }
         }
-        if a.seeds > 1 && !a.json {
-            print_spread(&rows[first..]);
+        if spacings.len() > 1 || a.seeds > 1 {
+            against_finest(&mut rows[first..]);
+            if !a.json {
+                print_against_finest(&rows[first..]);
+            }
         }
     }
     if a.json {
@@ -180,7 +202,82 @@ fn run_one(
         self_crossing_edges: j.whole.self_crossing_edges,
         max_strain: j.whole.max_strain,
         seam_gap_max_mm: j.whole.seam_gap_max_mm,
+        rings: g.rings,
+        against_finest: None,
+        spacing: settings.assemble.spacing,
     })
+}
+
+/// The `--spacing`s, finest last; every one out of range named before any work.
+fn check_spacings(spacings: &[f64]) -> anyhow::Result<Vec<f64>> {
+    let bad: Vec<String> = (spacings.iter())
+        .filter(|&&h| {
+            let mut s = GarmentSettings::default();
+            s.assemble.spacing = h;
+            s.problems().iter().any(|p| p.field == "spacing")
+        })
+        .map(|&h| crate::math::short(h))
+        .collect();
+    if !bad.is_empty() {
+        let [lo, hi] = gd::SPACING_RANGE;
+        anyhow::bail!("--spacing {}: each must be {lo} to {hi} m", bad.join(","));
+    }
+    let mut out = spacings.to_vec();
+    out.sort_by(|a, b| b.total_cmp(a));
+    out.dedup();
+    Ok(out)
+}
+
+/// Each row of one garment against the row of its seed at the finest spacing (the last); a
+/// perturbed row at the finest spacing against the unperturbed one (what chance alone moves).
+fn against_finest(rows: &mut [GarmentRow]) {
+    let finest = rows.last().map_or(0.0, |r| r.spacing);
+    let reference: Vec<(Option<u64>, Vec<RingHang>)> = (rows.iter())
+        .filter(|r| r.spacing == finest)
+        .map(|r| (r.seed, r.rings.clone()))
+        .collect();
+    for r in rows.iter_mut() {
+        let seed = if r.spacing == finest { None } else { r.seed };
+        let same = r.spacing == finest && r.seed.is_none();
+        let of_seed = reference.iter().find(|(s, _)| *s == seed).filter(|_| !same);
+        r.against_finest = of_seed.and_then(|(_, rings)| compare(&r.rings, rings));
+    }
+}
+
+/// One line per coarser spacing or perturbed start: its shape against the finest (the same
+/// seed, or the placement exactly), and its wall time.
+fn print_against_finest(rows: &[GarmentRow]) {
+    let Some(finest) = rows.last() else {
+        return;
+    };
+    let wall = |h: f64| {
+        let w: Vec<f64> = (rows.iter().filter(|r| r.spacing == h))
+            .map(|r| r.wall_seconds)
+            .collect();
+        super::bench::median(&w)
+    };
+    let fine_wall = wall(finest.spacing);
+    for r in rows {
+        let Some(d) = &r.against_finest else {
+            continue;
+        };
+        let (seed, against) = match r.seed {
+            Some(s) if r.spacing == finest.spacing => (format!(" (seed {s})"), " unperturbed"),
+            Some(s) => (format!(" (seed {s})"), ""),
+            None => (String::new(), ""),
+        };
+        println!(
+            "    at {} cm{seed} against {} cm{against}: rings' heights within {:.1} cm ({}), their strain \
+             within {:.1} points ({}); {:.2}x the wall time",
+            crate::math::short(r.spacing * 100.0),
+            crate::math::short(finest.spacing * 100.0),
+            d.height_m * 100.0,
+            d.height_ring,
+            d.strain * 100.0,
+            d.strain_ring,
+            wall(r.spacing) / fine_wall
+        );
+    }
 }
 
 /// The median and the range of `v` (not empty).
@@ -194,7 +291,8 @@ fn spread(v: &[f64]) -> (f64, f64, f64) {
 fn print_spread(rows: &[GarmentRow]) {
     let of = |f: &dyn Fn(&GarmentRow) -> f64| {
         let (m, lo, hi) = spread(&rows.iter().map(f).collect::<Vec<_>>());
-        format!("{m} ({lo} to {hi})")
+        let short = crate::math::short;
+        format!("{} ({} to {})", short(m), short(lo), short(hi))
     };
     let rest = rows.iter().filter(|r| r.at_rest).count();
     println!(
@@ -209,12 +307,17 @@ fn print_spread(rows: &[GarmentRow]) {
     );
 }
 
-/// One line per garment, then what failed.
-fn print_row(r: &GarmentRow) {
-    let seed = r
-        .seed
-        .map(|s| format!(" (perturbed, seed {s})"))
-        .unwrap_or_default()
+/// One line per garment (its spacing named when `spacing`), then what failed.
+fn print_row(r: &GarmentRow, spacing: bool) {
+    let at = if spacing {
+        format!(" at {} cm", crate::math::short(r.spacing * 100.0))
+    } else {
+        String::new()
+    };
+    let seed = at
+        + &r.seed
+            .map(|s| format!(" (perturbed, seed {s})"))
+            .unwrap_or_default()
         + if r.rim_bending {
             ""
         } else {

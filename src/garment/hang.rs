@@ -14,6 +14,11 @@
 //! has `highest - lowest` near 0; a garment placed below where it hangs rises (GarmentCode
 //! places a top's panels below the shoulders: the seams over the shoulders lift them).
 //! Heights are the simulation's `z`, m (above the floor for `drapekit garment`).
+//!
+//! Two drapes of one pattern (at two resolutions, or from two perturbed starts) are compared
+//! ring by ring ([`compare`]): the largest difference of a ring's mean height and of its
+//! strain along itself, each against its own rest (`bench garment --spacing` measures what a
+//! coarser cloth costs in shape this way).
 
 use super::fit_check::{ring_edges, RingKind};
 use super::spec::Pattern;
@@ -86,6 +91,69 @@ pub fn hang(
         .collect()
 }
 
+/// How two drapes of one pattern differ in their rings (two resolutions, say): the largest
+/// difference of a ring's mean height and of its strain along itself
+/// (`length_m / rest_length_m - 1`, each against its own rest: a coarser sampling of a curve
+/// is a little shorter), with the ring each is largest at.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct HangDifference {
+    /// The largest `|a.height_mean_m - b.height_mean_m|` over the rings, m.
+    pub height_m: f64,
+    /// The ring it is at (its first edge, as the fit check names it).
+    pub height_ring: String,
+    /// The largest difference of a ring's strain along itself (0.01: one point of percent).
+    pub strain: f64,
+    /// The ring it is at.
+    pub strain_ring: String,
+}
+
+/// The difference between the rings `a` and `b` of one pattern ([`HangDifference`]); `None`
+/// when they are not the same rings (another pattern) or there are none.
+///
+/// ```
+/// use drapekit::garment::fit_check::RingKind;
+/// use drapekit::garment::hang::{compare, RingHang};
+/// let ring = |name: &str, mean: f64, length: f64| RingHang {
+///     kind: RingKind::Opening,
+///     edges: vec![name.into()],
+///     length_m: length,
+///     rest_length_m: 1.0,
+///     height_m: [mean - 0.01, mean + 0.01],
+///     height_mean_m: mean,
+///     rise_m: 0.0,
+/// };
+/// let fine = [ring("hem", 0.40, 1.00), ring("neck", 1.40, 0.60)];
+/// let coarse = [ring("hem", 0.43, 1.01), ring("neck", 1.39, 0.63)];
+/// let d = compare(&coarse, &fine).unwrap();
+/// assert!((d.height_m - 0.03).abs() < 1e-12 && d.height_ring == "hem");
+/// assert!((d.strain - 0.03).abs() < 1e-12 && d.strain_ring == "neck");
+/// ```
+pub fn compare(a: &[RingHang], b: &[RingHang]) -> Option<HangDifference> {
+    let same = |(r, s): &(&RingHang, &RingHang)| r.kind == s.kind && r.edges == s.edges;
+    if a.is_empty() || a.len() != b.len() || !a.iter().zip(b).all(|p| same(&p)) {
+        return None;
+    }
+    let strain = |r: &RingHang| r.length_m / r.rest_length_m - 1.0;
+    let largest = |f: &dyn Fn(&RingHang, &RingHang) -> f64| {
+        let (mut most, mut at) = (0.0, 0);
+        for (k, (r, s)) in a.iter().zip(b).enumerate() {
+            let d = f(r, s).abs();
+            if d > most {
+                (most, at) = (d, k);
+            }
+        }
+        (most, a[at].edges.first().cloned().unwrap_or_default())
+    };
+    let (height_m, height_ring) = largest(&|r, s| r.height_mean_m - s.height_mean_m);
+    let (strain, strain_ring) = largest(&|r, s| strain(r) - strain(s));
+    Some(HangDifference {
+        height_m,
+        height_ring,
+        strain,
+        strain_ring,
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -122,6 +190,19 @@ mod tests {
             assert!((r.length_m - r.rest_length_m).abs() < 1e-12);
             assert!(r.length_m > 0.0 && r.length_m == r0.length_m);
         }
+    }
+
+    #[test]
+    fn drapes_of_other_rings_are_not_compared() {
+        let (pattern, placed, edges) = tube();
+        let rings = hang(&pattern, &edges, &placed, &placed);
+        let same = compare(&rings, &rings).expect("the same rings");
+        assert_eq!((same.height_m, same.strain), (0.0, 0.0));
+        assert!(compare(&rings, &rings[1..]).is_none());
+        let mut other = rings.clone();
+        other[0].edges[0].push('x');
+        assert!(compare(&rings, &other).is_none());
+        assert!(compare(&[], &[]).is_none());
     }
 
     #[test]
