@@ -20,6 +20,7 @@ use super::orient::{self, Plan};
 use super::topology::{is_index_degenerate, Topology, BOUNDARY, NON_MANIFOLD};
 use super::weld::{weld_map, WeldTolerance};
 use super::TriMesh;
+use crate::math::uf_root;
 use serde::Serialize;
 use std::fmt;
 
@@ -169,7 +170,8 @@ pub fn diagnose_with(
 
     let mut manifold_half = 0usize;
     let mut boundary = 0usize;
-    let mut boundary_uf = UnionFind::new(nv);
+    // Boundary loops: union-find over the boundary edges' ends.
+    let mut parent: Vec<usize> = (0..nv).collect();
     for (h, &o) in topo.opp.iter().enumerate() {
         if is_index_degenerate(&mesh.faces[h / 3]) {
             continue;
@@ -178,17 +180,19 @@ pub fn diagnose_with(
             BOUNDARY => {
                 boundary += 1;
                 let f = &mesh.faces[h / 3];
-                boundary_uf.union(f[h % 3], f[(h + 1) % 3]);
+                let a = uf_root(&mut parent, f[h % 3] as usize);
+                let b = uf_root(&mut parent, f[(h + 1) % 3] as usize);
+                parent[a.max(b)] = a.min(b);
             }
             NON_MANIFOLD => {}
             _ => manifold_half += 1,
         }
     }
     let boundary_loops = {
-        let mut roots: Vec<u32> = Vec::new();
+        let mut roots: Vec<usize> = Vec::new();
         for (h, &o) in topo.opp.iter().enumerate() {
             if o == BOUNDARY && !is_index_degenerate(&mesh.faces[h / 3]) {
-                roots.push(boundary_uf.find(mesh.faces[h / 3][h % 3]));
+                roots.push(uf_root(&mut parent, mesh.faces[h / 3][h % 3] as usize));
             }
         }
         roots.sort_unstable();
@@ -328,32 +332,6 @@ fn count_non_manifold_vertices(mesh: &TriMesh, topo: &Topology) -> usize {
     count
 }
 
-struct UnionFind {
-    parent: Vec<u32>,
-}
-
-impl UnionFind {
-    fn new(n: usize) -> UnionFind {
-        UnionFind {
-            parent: (0..n as u32).collect(),
-        }
-    }
-    fn find(&mut self, mut x: u32) -> u32 {
-        while self.parent[x as usize] != x {
-            let p = self.parent[self.parent[x as usize] as usize];
-            self.parent[x as usize] = p;
-            x = p;
-        }
-        x
-    }
-    fn union(&mut self, a: u32, b: u32) {
-        let (ra, rb) = (self.find(a), self.find(b));
-        if ra != rb {
-            self.parent[ra as usize] = rb;
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -377,6 +355,21 @@ mod tests {
         assert_eq!((d.boundary_edges, d.boundary_loops), (4, 1));
         assert_eq!(d.euler_characteristic, 1);
         assert_eq!(d.shell_state, ShellState::Oriented);
+    }
+
+    #[test]
+    fn a_tube_open_at_both_ends_has_two_boundary_loops() {
+        // The unit cube without its top and bottom (two faces each): a band, two loops of 4 edges.
+        let mut m = generate::cube(1.0);
+        let z = |f: &[u32; 3], c: f64| f.iter().all(|&v| m.positions[v as usize].z == c);
+        let keep: Vec<[u32; 3]> = (m.faces.iter())
+            .filter(|f| !z(f, 0.5) && !z(f, -0.5))
+            .copied()
+            .collect();
+        m.faces = keep;
+        let d = diagnose(&m);
+        assert_eq!((d.boundary_edges, d.boundary_loops), (8, 2));
+        assert_eq!(d.euler_characteristic, 0);
     }
 
     #[test]
