@@ -54,7 +54,7 @@ use crate::cloth::integrate::{Integrator, SolverSettings};
 use crate::cloth::pattern::{self, Pins};
 use crate::collide::grid::MAX_CELLS;
 use crate::garment::assemble::Placement;
-use crate::garment::drape::{GarmentSettings, WaistHold, SEW_ITERATIONS};
+use crate::garment::drape::{GarmentSettings, WaistHold, GARMENT_INTEGRATOR, SEW_ITERATIONS};
 use crate::garment::Pattern;
 use crate::math::{short, Point2, Vec3};
 use crate::mesh::transform::{Units, Up};
@@ -1268,6 +1268,9 @@ fn garment_spec(
         opts.friction = f;
     }
     settings.solver = cx.solver;
+    if cx.solver_file.integrator.is_none() {
+        settings.solver.integrator = GARMENT_INTEGRATOR;
+    }
     if cx.solver_file.iterations.is_none() {
         settings.solver.iterations = SEW_ITERATIONS;
     }

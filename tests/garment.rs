@@ -124,11 +124,15 @@ fn a_tube_sewn_round_a_cylinder_closes_and_is_round() {
     // The 1.4 cm of slack (1.2 m less 2 pi 0.1888 m) gathers in low tents at the two seams, a
     // tent of width 2a holding slack e rising sqrt(a e): about 1 cm.
     assert!(max < r_body + skin + 0.015, "round: {min} to {max}");
-    let hugging = ring.iter().filter(|&&d| d < r_body + skin + 0.003).count();
+    // Round and on the cylinder: a closed curve near a circle has its mean radius at its
+    // length over 2 pi, so a tube neither stretched nor standing off has its mid-height ring
+    // at 1.2 m / 2 pi = 0.19099 m on average, however its slack is shared out round it (in
+    // narrow tents at the seams, or in wide low ones).
+    let mean = ring.iter().sum::<f64>() / ring.len() as f64;
+    let round = 1.2 / (2.0 * std::f64::consts::PI);
     assert!(
-        hugging * 10 >= ring.len() * 8,
-        "{hugging} of {} within 3 mm of the cylinder",
-        ring.len()
+        (mean - round).abs() < 1e-3,
+        "mean radius {mean} against {round}"
     );
 }
 

@@ -16,6 +16,7 @@
 
 use super::garment::{judge, read_body};
 use crate::cloth::fabric::Fabric;
+use crate::cloth::integrate::Integrator;
 use crate::garment::drape::{self as gd, GarmentSettings};
 use crate::garment::hang::{compare, HangDifference, RingHang};
 use anyhow::Context;
@@ -54,6 +55,10 @@ pub struct GarmentBench {
     /// line per garment gives each measure's median and range.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..))]
     pub seeds: u64,
+    /// The integrator, as `garment --integrator` (implicit-euler, the default, or
+    /// projective-dynamics).
+    #[arg(long, default_value = "implicit-euler")]
+    pub integrator: Integrator,
     /// No hinges over the panels' rim bands, as `garment --no-rim-bending` (to measure what
     /// they do: README, `bench garment`).
     #[arg(long)]
@@ -101,6 +106,8 @@ pub struct GarmentRow {
     pub seed: Option<u64>,
     /// Whether the panels had hinges over their rim bands (`--no-rim-bending`: false).
     pub rim_bending: bool,
+    /// The integrator (`--integrator`).
+    pub integrator: Integrator,
     /// The verdict's measures of the whole garment.
     pub body_crossing_edges: usize,
     pub self_crossing_edges: usize,
@@ -127,6 +134,14 @@ pub fn run(a: GarmentBench) -> anyhow::Result<()> {
     settings.settle_max = a.settle_max;
     settings.hold_waist = super::garment::hold_waist(&a.hold_waist)?;
     settings.assemble.rim_bending = !a.no_rim_bending;
+    settings.solver.integrator = a.integrator;
+    if let Some(p) = settings
+        .problems()
+        .into_iter()
+        .find(|p| p.field == "integrator")
+    {
+        anyhow::bail!("--integrator {}", p.message);
+    }
     let keep = |p: &str, b: &str| {
         a.only
             .as_ref()
@@ -198,6 +213,7 @@ fn run_one(
         held_waist: g.hold,
         seed: settings.perturb,
         rim_bending: settings.assemble.rim_bending,
+        integrator: settings.solver.integrator,
         body_crossing_edges: j.whole.body_crossing_edges,
         self_crossing_edges: j.whole.self_crossing_edges,
         max_strain: j.whole.max_strain,
@@ -307,7 +323,8 @@ fn print_spread(rows: &[GarmentRow]) {
     );
 }
 
-/// One line per garment (its spacing named when `spacing`), then what failed.
+/// One line per garment (its spacing named when `spacing`; implicit Euler named), then what
+/// failed.
 fn print_row(r: &GarmentRow, spacing: bool) {
     let at = if spacing {
         format!(" at {} cm", crate::math::short(r.spacing * 100.0))
@@ -322,6 +339,11 @@ fn print_row(r: &GarmentRow, spacing: bool) {
             ""
         } else {
             " (no rim hinges)"
+        }
+        + if r.integrator == Integrator::ImplicitEuler {
+            " (implicit Euler)"
+        } else {
+            ""
         };
     println!(
         "{} on {}{seed}: {} particles; sewing {:.2} s ({:.1} s wall, gap {:.1} mm); drape \

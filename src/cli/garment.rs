@@ -70,9 +70,10 @@ pub struct GarmentArgs {
     /// Friction between layers of cloth (Coulomb, a fraction of the normal impulse).
     #[arg(long, default_value_t = 0.0)]
     pub cloth_friction: f64,
-    /// The integrator: projective-dynamics (default) or implicit-euler (slower; holds contacts
-    /// as constraints on the motion). The explicit ones would need steps far below 10 ms.
-    #[arg(long, default_value = "projective-dynamics")]
+    /// The integrator: implicit-euler (default: contacts constrain the motion, and a drape
+    /// settles in about a simulated second) or projective-dynamics. The explicit ones would
+    /// need steps far below 10 ms.
+    #[arg(long, default_value = "implicit-euler")]
     pub integrator: crate::cloth::integrate::Integrator,
     /// Also write each panel alone, as `OUT_DIR/panels/<panel>.obj`.
     #[arg(long)]
