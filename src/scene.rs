@@ -4,8 +4,8 @@
 //! units = "m"                      # all lengths of the file (not fabric tables): m, cm, mm
 //! gravity = [0.0, 0.0, -9.81]      # length units per s^2 (default: 9.81 m/s^2 down z)
 //! [solver]
-//! integrator = "projective-dynamics" # (default) or "implicit-euler", "leapfrog",
-//!                                  # "explicit-euler"
+//! integrator = "projective-dynamics" # (default; a [[garment]]'s: "implicit-euler") or
+//!                                  # "implicit-euler", "leapfrog", "explicit-euler"
 //! dt = 0.01                        # s (default: 0.01 s for the implicit integrators; for the
 //!                                  # explicit ones, 0.9 of the cloth's stability estimate)
 //! newton_iterations = 1            # implicit Euler: Newton steps per step (1: Baraff-Witkin; <= 100)
