@@ -743,6 +743,19 @@ fn bench_garment_refuses_every_bad_spacing_by_name() {
 }
 
 #[test]
+fn a_garment_is_sewn_with_implicit_euler_unless_asked() {
+    // The report names the integrator: implicit Euler by default, projective dynamics when
+    // asked, and the two sew the same start differently.
+    let body = common::cylinder(0.186, 0.5, 1.5, 48);
+    let (_a, default, _) = tube_on(&body, &["--sew-max", "0.04"]);
+    let pd = ["--sew-max", "0.04", "--integrator", "projective-dynamics"];
+    let (_b, asked, _) = tube_on(&body, &pd);
+    assert_eq!(default["integrator"], "implicit-euler");
+    assert_eq!(asked["integrator"], "projective-dynamics");
+    assert_ne!(default["sew"]["seam_gap_max"], asked["sew"]["seam_gap_max"]);
+}
+
+#[test]
 fn a_bad_hold_waist_is_refused_by_name() {
     // Real inputs: the refusal comes before any work, and nothing is written.
     let dir = tempfile::tempdir().unwrap();

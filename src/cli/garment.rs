@@ -150,6 +150,8 @@ pub struct GarmentReport {
     pub fabric: String,
     /// Particle spacing, m.
     pub spacing: f64,
+    /// The integrator (`--integrator`).
+    pub integrator: crate::cloth::integrate::Integrator,
     /// Whether the body is closed (inside tests, and moving seams out of it, need it).
     pub body_closed: bool,
     /// Each closed ring of the pattern against the body's girth where it sits, checked before
@@ -752,6 +754,7 @@ pub fn run(args: GarmentArgs) -> anyhow::Result<()> {
         body_moved_m: moved.map(|d| [d.x, d.y, d.z]),
         fabric: args.fabric.clone(),
         spacing: args.spacing,
+        integrator: args.integrator,
         body_closed: c.closed,
         fit_check: fit,
         outcome,
@@ -827,8 +830,8 @@ fn too_short(r: &Ring) -> String {
 
 fn print_summary(r: &GarmentReport) {
     println!(
-        "{}: {} particles, {} seam springs, {} on {}",
-        r.pattern, r.outcome.particles, r.outcome.seam_springs, r.fabric, r.body
+        "{}: {} particles, {} seam springs, {} on {}, {}",
+        r.pattern, r.outcome.particles, r.outcome.seam_springs, r.fabric, r.body, r.integrator
     );
     for a in &r.assumed {
         println!("  assumed: {a}");
