@@ -331,7 +331,7 @@ fn print_row(r: &GarmentRow, spacing: bool) {
     } else {
         String::new()
     };
-    let seed = at
+    let label = at
         + &r.seed
             .map(|s| format!(" (perturbed, seed {s})"))
             .unwrap_or_default()
@@ -346,7 +346,7 @@ fn print_row(r: &GarmentRow, spacing: bool) {
             ""
         };
     println!(
-        "{} on {}{seed}: {} particles; sewing {:.2} s ({:.1} s wall, gap {:.1} mm); drape \
+        "{} on {}{label}: {} particles; sewing {:.2} s ({:.1} s wall, gap {:.1} mm); drape \
          {:.2} s ({:.1} s wall, {}); {:.1} s wall in all; {}",
         r.pattern,
         r.body,
