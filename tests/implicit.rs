@@ -479,3 +479,32 @@ fn a_finer_real_cotton_lying_on_a_sphere_stretches_less_than_one_percent_with_fi
     let worst = worst_strain_after(&mut w, &settings, 40, 80);
     assert!(worst < 0.01, "largest strain after landing {worst}");
 }
+
+#[test]
+fn a_run_hands_its_analysis_to_the_next_and_the_bits_stay_the_same() {
+    // Sewing runs a few steps at a time: each run's implicit Euler solver takes the direct
+    // system's analysis the last one left in the world (`integrate::Analysis`) instead of
+    // analysing the same pattern again. Three runs of 10 steps each way, from the same start,
+    // with stiffer springs from the second run on (the constants change, the pattern does not).
+    let settings = SolverSettings::new(Integrator::ImplicitEuler);
+    let go = |keep: bool| {
+        let mut w = over_sphere(0.2, 0.02);
+        for run in 0..3 {
+            if !keep {
+                w.analysis = Default::default();
+            }
+            assert_eq!(w.analysis.is_empty(), run == 0 || !keep);
+            if run == 1 {
+                w.model.springs.iter_mut().for_each(|s| s.k *= 2.0);
+            }
+            sim::run_quiet(&mut w, &settings, Stop::Steps(10)).unwrap();
+            assert!(!w.analysis.is_empty(), "a finished run leaves its analysis");
+        }
+        w.state.x
+    };
+    let (kept, fresh) = (go(true), go(false));
+    assert!(kept.iter().zip(&fresh).all(|(a, b)| a == b));
+    // The runs moved the cloth (the comparison is not of the start).
+    let start = over_sphere(0.2, 0.02).state.x;
+    assert!(kept.iter().zip(&start).any(|(a, b)| (a - b).norm() > 1e-3));
+}

@@ -114,7 +114,8 @@ fn one_step(w: &World, settings: &SolverSettings, trace: bool) -> (Vec<Point3>, 
         let s = t.elapsed().as_secs_f64();
         (x, s, pd.trace.take().unwrap_or_default())
     } else {
-        let mut solver = integrate::make(settings, &w.model, &w.state.x);
+        let fresh = &mut integrate::Analysis::default();
+        let mut solver = integrate::make(settings, &w.model, &w.state.x, fresh);
         let t = Instant::now();
         solver.step(&input, &mut out);
         (x, t.elapsed().as_secs_f64(), Vec::new())

@@ -115,6 +115,8 @@ pub struct World {
     pub grid_built_at: Vec<Option<u64>>,
     /// Cloth against cloth, when the scene needs it (`None`: off, the default).
     pub self_contact: Option<SelfContact>,
+    /// What the last run's solver left for the next (`integrate::Analysis`).
+    pub analysis: integrate::Analysis,
 }
 
 /// Cloth-against-cloth contact in the step loop: its options and the hash it keeps between
@@ -434,6 +436,7 @@ impl World {
             stable_step,
             grid_built_at: vec![None; n],
             self_contact: None,
+            analysis: integrate::Analysis::default(),
         }
     }
 }
@@ -655,7 +658,8 @@ pub fn run(
     let dt = settings.dt;
     let integrator = settings.integrator;
     // Built from the world as loaded (a checkpoint's pinned particles are where they were).
-    let mut solver: Box<dyn Solver> = integrate::make(settings, &world.model, &world.state.x);
+    let mut solver: Box<dyn Solver> =
+        integrate::make(settings, &world.model, &world.state.x, &mut world.analysis);
     let mut lp = Loop {
         watch: watch::Watch::new(world).checking(control.stability),
         rest: watch::Rest::new(stop, dt),
@@ -787,6 +791,7 @@ pub fn run(
     lp.stats.time = lp.stats.steps as f64 * dt;
     lp.stats.wall_seconds = wall_before + start.elapsed().as_secs_f64();
     lp.stats.solver = solver.stats();
+    solver.hand_over(&mut world.analysis);
     Ok(lp.stats)
 }
 

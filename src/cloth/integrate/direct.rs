@@ -11,10 +11,10 @@
 
 use crate::cloth::model::ClothModel;
 use crate::math::Vec3;
-use faer::linalg::solvers::Solve;
-use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, SymbolicCholesky};
 use faer::sparse::{Argsort, Pair, SparseColMat, SymbolicSparseColMat};
-use faer::{Mat, Side};
+use faer::{Conj, Mat, Side};
 use nalgebra::Matrix3;
 
 /// The contact penalty relative to the diagonal block's scale.
@@ -33,13 +33,22 @@ enum Block {
 
 /// The fixed pattern, its symbolic factorisation and the scratch of the values.
 pub struct BlockSystem {
+    /// The blocks `(a, b)` of the pattern in visiting order: what a model must give to reuse
+    /// this system (`fits`).
+    blocks: Vec<(u32, u32)>,
     /// Unknown of each particle (`u32::MAX`: pinned).
     index: Vec<u32>,
     particles: Vec<u32>,
     symbolic: SymbolicSparseColMat<usize>,
     argsort: Argsort<usize>,
-    llt_symbolic: SymbolicLlt<usize>,
+    /// The ordering and the factor's structure.
+    llt_symbolic: SymbolicCholesky<usize>,
     values: Vec<f64>,
+    /// The factor's values, refactored in place each step: a factor allocated afresh each
+    /// step cost the pages' faults (a sixth of a `dress_pencil` drape's wall time).
+    factor: Vec<f64>,
+    /// The scratch of the factorisation and of the solve, kept for the same reason.
+    scratch: MemBuffer,
     rhs: Mat<f64>,
 }
 
@@ -71,15 +80,30 @@ impl BlockSystem {
     pub fn new(model: &ClothModel) -> BlockSystem {
         let (index, particles) = model.free_unknowns();
         let mut pairs = Vec::new();
-        Self::visit(model, &index, &particles, |a, b, _| {
-            block_pairs(a, b, &mut pairs)
-        });
+        let blocks = Self::blocks(model, &index, &particles);
+        for &(a, b) in &blocks {
+            block_pairs(a as usize, b as usize, &mut pairs);
+        }
         let nu = 3 * particles.len();
         let (symbolic, argsort) =
             SymbolicSparseColMat::try_new_from_indices(nu, nu, &pairs).expect("valid indices");
-        let llt_symbolic =
-            SymbolicLlt::try_new(symbolic.as_ref(), Side::Lower).expect("symbolic Cholesky");
+        let llt_symbolic = factorize_symbolic_cholesky(
+            symbolic.as_ref(),
+            Side::Lower,
+            Default::default(),
+            Default::default(),
+        )
+        .expect("symbolic Cholesky");
+        let par = faer::get_global_parallelism();
+        let scratch = MemBuffer::new(
+            llt_symbolic
+                .factorize_numeric_llt_scratch::<f64>(par, Default::default())
+                .or(llt_symbolic.solve_in_place_scratch::<f64>(1, par)),
+        );
         BlockSystem {
+            blocks,
+            factor: vec![0.0; llt_symbolic.len_val()],
+            scratch,
             index,
             particles,
             symbolic,
@@ -88,6 +112,22 @@ impl BlockSystem {
             values: Vec::with_capacity(pairs.len()),
             rhs: Mat::zeros(nu, 1),
         }
+    }
+
+    /// The blocks of `model`'s pattern, in visiting order.
+    fn blocks(model: &ClothModel, index: &[u32], particles: &[u32]) -> Vec<(u32, u32)> {
+        let mut blocks = Vec::new();
+        Self::visit(model, index, particles, |a, b, _| {
+            blocks.push((a as u32, b as u32))
+        });
+        blocks
+    }
+
+    /// Whether `model` has this system's pattern (the same particles joined and pinned; the
+    /// constants may differ): then this analysis serves its solver too.
+    pub fn fits(&self, model: &ClothModel) -> bool {
+        let (index, particles) = model.free_unknowns();
+        index == self.index && Self::blocks(model, &index, &particles) == self.blocks
     }
 
     /// Calls `f(a, b, block)` (unknowns, `a >= b`) for every block of the pattern, in a fixed
@@ -152,14 +192,31 @@ impl BlockSystem {
         let particles = &self.particles;
         let mat = SparseColMat::new_from_argsort(self.symbolic.clone(), &self.argsort, vals)
             .expect("the pattern's values");
-        let llt = Llt::try_new_with_symbolic(self.llt_symbolic.clone(), mat.as_ref(), Side::Lower)
+        // What `Llt::try_new_with_symbolic` and its solve do, in the kept buffers.
+        let par = faer::get_global_parallelism();
+        self.factor.fill(0.0);
+        let llt = (self.llt_symbolic)
+            .factorize_numeric_llt(
+                &mut self.factor,
+                mat.as_ref(),
+                Side::Lower,
+                Default::default(),
+                par,
+                MemStack::new(&mut self.scratch),
+                Default::default(),
+            )
             .expect("the implicit matrix is positive definite");
         for (u, &i) in particles.iter().enumerate() {
             for c in 0..3 {
                 self.rhs[(3 * u + c, 0)] = rhs[i as usize][c];
             }
         }
-        llt.solve_in_place(self.rhs.as_mut());
+        llt.solve_in_place_with_conj(
+            Conj::No,
+            self.rhs.as_mut(),
+            par,
+            MemStack::new(&mut self.scratch),
+        );
         for d in delta.iter_mut() {
             *d = Vec3::zeros();
         }
@@ -169,6 +226,51 @@ impl BlockSystem {
                 self.rhs[(3 * u + 1, 0)],
                 self.rhs[(3 * u + 2, 0)],
             );
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cloth::elements::Spring;
+    use crate::cloth::fabric::Fabric;
+    use crate::cloth::pattern::{build, Pins};
+    use crate::math::{Point2, Point3};
+
+    /// A 6 cm square of cotton at 2 cm spacing, flat, pinned at one corner or free.
+    fn square(pinned: bool) -> ClothModel {
+        let s = 0.03;
+        let outline = [(-s, -s), (s, -s), (s, s), (-s, s)].map(|(x, y)| Point2::new(x, y));
+        let pins = if pinned {
+            Pins::at(&[Point2::new(-s, s)])
+        } else {
+            Pins::default()
+        };
+        let fabric = Fabric::cotton();
+        let p = build(&outline, 0.02, &fabric, &pins).unwrap();
+        let placed: Vec<Point3> = p.flat.iter().map(|q| Point3::new(q.x, q.y, 0.0)).collect();
+        ClothModel::assemble(&[("square".into(), p, fabric, placed)], Vec3::zeros()).0
+    }
+
+    #[test]
+    fn an_analysis_fits_a_model_joined_and_pinned_alike_whatever_its_constants() {
+        let model = square(false);
+        let sys = BlockSystem::new(&model);
+        assert!(sys.fits(&model));
+        // Other constants: the same pattern.
+        let mut stiffer = model.clone();
+        stiffer.springs.iter_mut().for_each(|s| s.k *= 10.0);
+        assert!(sys.fits(&stiffer));
+        // One more spring, one spring joining other particles, a pinned corner: other patterns.
+        let mut more = model.clone();
+        let last = *more.springs.last().unwrap();
+        more.springs.push(Spring { a: 0, b: 5, ..last });
+        let mut moved = model.clone();
+        let first = &mut moved.springs[0];
+        first.b = if first.b == 5 { 6 } else { 5 };
+        for other in [&more, &moved, &square(true)] {
+            assert!(!sys.fits(other));
         }
     }
 }

@@ -33,10 +33,10 @@
 use super::cg::{self, Filter, Scratch};
 use super::direct::{BlockSystem, PENALTY};
 use super::saved::{ImplicitKept, Kept, SolverState};
-use super::LinearSolver;
 use super::{
     contact_friction, contact_normal, SolveStats, Solver, SolverSettings, StepIn, StepOut,
 };
+use super::{Analysis, LinearSolver};
 use crate::cloth::elements::bend;
 use crate::cloth::forces;
 use crate::cloth::model::ClothModel;
@@ -77,16 +77,23 @@ pub struct ImplicitEuler {
 }
 
 impl ImplicitEuler {
-    /// A solver for `model`.
-    pub fn new(settings: &SolverSettings, model: &ClothModel) -> ImplicitEuler {
+    /// A solver for `model`, with the direct solver's analysis from `analysis` when it fits.
+    pub fn new(
+        settings: &SolverSettings,
+        model: &ClothModel,
+        analysis: &mut Analysis,
+    ) -> ImplicitEuler {
         let n = model.len();
         ImplicitEuler {
             settings: *settings,
             hess: vec![Matrix3::zeros(); model.springs.len()],
             diag: vec![Matrix3::zeros(); n],
             precond: vec![Matrix3::zeros(); n],
-            direct: (settings.linear_solver == LinearSolver::Cholesky)
-                .then(|| BlockSystem::new(model)),
+            direct: (settings.linear_solver == LinearSolver::Cholesky).then(|| {
+                (analysis.direct.take())
+                    .filter(|sys| sys.fits(model))
+                    .unwrap_or_else(|| BlockSystem::new(model))
+            }),
             filter: vec![Filter::Free; n],
             stuck: vec![false; n],
             normal_force: vec![0.0; n],
@@ -318,6 +325,10 @@ impl Solver for ImplicitEuler {
         self.normal_force.clone_from(&k.normal_force);
         self.slip_dir.clone_from(&k.slip_dir);
         self.stats = state.stats;
+    }
+
+    fn hand_over(&mut self, analysis: &mut Analysis) {
+        analysis.direct = self.direct.take();
     }
 }
 

@@ -323,15 +323,57 @@ pub trait Solver: Send {
     /// same number of steps. Panics when its arrays do not fit the model (`sim::checkpoint`
     /// checks them first).
     fn restore(&mut self, state: &saved::SolverState);
+    /// Leaves what the next run on the same model can use in `analysis` (the solver is done).
+    fn hand_over(&mut self, analysis: &mut Analysis) {
+        let _ = analysis;
+    }
 }
 
-/// The solver of `settings` for a model whose pinned particles sit at `x`.
-pub fn make(settings: &SolverSettings, model: &ClothModel, x: &[Point3]) -> Box<dyn Solver> {
+/// What a finished run's solver leaves to the next run on the same world
+/// (`sim::World::analysis`): the direct solver's analysis of its matrix's pattern (the
+/// ordering, the factor's structure, its buffers). The pattern depends only on which particles
+/// the springs and bending join and which are pinned, not on the constants: sewing, which runs
+/// a few steps at a time with seams of changing stiffness, analyses it once. A new solver takes
+/// it only when its model has the same pattern (`direct::BlockSystem::fits`), so the results
+/// are the same bits either way.
+#[derive(Default)]
+pub struct Analysis {
+    direct: Option<direct::BlockSystem>,
+}
+
+impl Analysis {
+    /// Whether nothing is kept.
+    pub fn is_empty(&self) -> bool {
+        self.direct.is_none()
+    }
+}
+
+impl std::fmt::Debug for Analysis {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let kept = if self.direct.is_some() {
+            "a direct system"
+        } else {
+            "nothing"
+        };
+        write!(f, "Analysis({kept})")
+    }
+}
+
+/// The solver of `settings` for a model whose pinned particles sit at `x`, taking what fits
+/// from `analysis`.
+pub fn make(
+    settings: &SolverSettings,
+    model: &ClothModel,
+    x: &[Point3],
+    analysis: &mut Analysis,
+) -> Box<dyn Solver> {
     match settings.integrator {
         Integrator::ExplicitEuler | Integrator::Leapfrog => {
             Box::new(explicit::Explicit::new(settings.integrator))
         }
-        Integrator::ImplicitEuler => Box::new(implicit::ImplicitEuler::new(settings, model)),
+        Integrator::ImplicitEuler => {
+            Box::new(implicit::ImplicitEuler::new(settings, model, analysis))
+        }
         Integrator::ProjectiveDynamics => {
             Box::new(projective::ProjectiveDynamics::new(settings, model, x))
         }
