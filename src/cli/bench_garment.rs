@@ -57,7 +57,7 @@ pub struct GarmentBench {
     pub seeds: u64,
     /// The integrator, as `garment --integrator` (implicit-euler, the default, or
     /// projective-dynamics).
-    #[arg(long, default_value = "implicit-euler")]
+    #[arg(long, default_value_t = crate::garment::drape::GARMENT_INTEGRATOR)]
     pub integrator: Integrator,
     /// No hinges over the panels' rim bands, as `garment --no-rim-bending` (to measure what
     /// they do: README, `bench garment`).

@@ -73,7 +73,7 @@ pub struct GarmentArgs {
     /// The integrator: implicit-euler (default: contacts constrain the motion, and a drape
     /// settles in about a simulated second) or projective-dynamics. The explicit ones would
     /// need steps far below 10 ms.
-    #[arg(long, default_value = "implicit-euler")]
+    #[arg(long, default_value_t = crate::garment::drape::GARMENT_INTEGRATOR)]
     pub integrator: crate::cloth::integrate::Integrator,
     /// Also write each panel alone, as `OUT_DIR/panels/<panel>.obj`.
     #[arg(long)]
