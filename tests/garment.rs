@@ -1993,3 +1993,63 @@ fn hoody_mean_on_mean_all_passes_the_issues_verdict_at_1_cm_in_cotton() {
     assert!(r["moving_fraction"].as_f64().unwrap() <= 0.015);
     assert_eq!(r["verdict"], "pass", "{}", r["failed"]);
 }
+
+#[test]
+fn dress_pencil_on_mean_female_drapes_clean_and_fails_only_the_strain_the_fit_check_foresaw() {
+    // `dress_pencil` (not made for this body) with `garment`'s defaults: at rest, every seam
+    // within 1 mm, nothing inside or through the body, nothing through the cloth. Its one
+    // failure is the strain, and the fit check said why before the drape: the skirt's waist
+    // seam (84.3 cm) is placed where the body is about 100 cm round, so the skirt is stretched
+    // over the hips (README, `bench garment`).
+    let Some(root) = common::realdata() else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let pattern = root.join("patterns/dress_pencil_specification.json");
+    let body = root.join("bodies/mean_female.obj");
+    let (r, _) = common::run_json(&[
+        "garment",
+        pattern.to_str().unwrap(),
+        "--body",
+        body.to_str().unwrap(),
+        "-o",
+        dir.path().to_str().unwrap(),
+        "--json",
+    ]);
+    let g = &r["garment"];
+    let f = |k: &str| g[k].as_f64().unwrap();
+    assert_eq!(r["drape"]["done"], true, "at rest: {}", r["drape"]);
+    assert!(f("seam_gap_max_mm") <= 1.0, "{g}");
+    assert_eq!(f("particles_inside"), 0.0, "{g}");
+    assert_eq!(f("body_crossing_edges"), 0.0, "{g}");
+    assert!(f("self_crossing_edges") <= 10.0, "{g}");
+    let failed = r["failed"].as_array().unwrap();
+    assert_eq!(failed.len(), 1, "{failed:?}");
+    assert!(failed[0].as_str().unwrap().starts_with("strain:"));
+    assert!(f("max_strain") > 0.05);
+    // Foreseen: the seam ring of the skirt's waist is too short for the body where it sits.
+    let rings = r["fit_check"]["rings"].as_array().unwrap();
+    let waist = rings
+        .iter()
+        .find(|x| x["kind"] == "seam" && x["panels"].to_string().contains("skirt"))
+        .expect("the waist seam's ring");
+    assert_eq!(waist["fits"], false, "{waist}");
+    assert!((waist["length_m"].as_f64().unwrap() - 0.843).abs() < 0.001);
+    // And the worst stretch is in the skirt.
+    let worst = r["spots"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|s| s["kind"] == "strain")
+        .max_by(|a, b| {
+            a["worst"]
+                .as_f64()
+                .partial_cmp(&b["worst"].as_f64())
+                .unwrap()
+        })
+        .expect("a strain spot");
+    assert!(
+        worst["panel"].as_str().unwrap().starts_with("skirt"),
+        "{worst}"
+    );
+}
