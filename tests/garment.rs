@@ -1945,6 +1945,28 @@ fn a_bodice_sewn_to_a_held_skirt_top_does_not_follow_it() {
     assert_eq!(world.hold.unwrap().followers, [None; 4]);
 }
 
+/// `garment` with its defaults on the real data's `pattern` and `body`: its output directory and
+/// JSON report.
+fn garment_with_defaults(
+    root: &Path,
+    pattern: &str,
+    body: &str,
+) -> (tempfile::TempDir, serde_json::Value) {
+    let dir = tempfile::tempdir().unwrap();
+    let pattern = root.join(format!("patterns/{pattern}_specification.json"));
+    let body = root.join(format!("bodies/{body}.obj"));
+    let (r, _) = common::run_json(&[
+        "garment",
+        pattern.to_str().unwrap(),
+        "--body",
+        body.to_str().unwrap(),
+        "-o",
+        dir.path().to_str().unwrap(),
+        "--json",
+    ]);
+    (dir, r)
+}
+
 #[test]
 fn hoody_mean_on_mean_all_passes_the_issues_verdict_at_1_cm_in_cotton() {
     // The issue's check of a real garment, with `garment`'s defaults (1 cm, cotton, implicit
@@ -1955,18 +1977,7 @@ fn hoody_mean_on_mean_all_passes_the_issues_verdict_at_1_cm_in_cotton() {
     let Some(root) = common::realdata() else {
         return;
     };
-    let dir = tempfile::tempdir().unwrap();
-    let pattern = root.join("patterns/hoody_mean_specification.json");
-    let body = root.join("bodies/mean_all.obj");
-    let (r, _) = common::run_json(&[
-        "garment",
-        pattern.to_str().unwrap(),
-        "--body",
-        body.to_str().unwrap(),
-        "-o",
-        dir.path().to_str().unwrap(),
-        "--json",
-    ]);
+    let (_dir, r) = garment_with_defaults(&root, "hoody_mean", "mean_all");
     assert_eq!(
         (&r["fabric"], &r["spacing"], &r["integrator"]),
         (
@@ -2004,18 +2015,7 @@ fn dress_pencil_on_mean_female_drapes_clean_and_fails_only_the_strain_the_fit_ch
     let Some(root) = common::realdata() else {
         return;
     };
-    let dir = tempfile::tempdir().unwrap();
-    let pattern = root.join("patterns/dress_pencil_specification.json");
-    let body = root.join("bodies/mean_female.obj");
-    let (r, _) = common::run_json(&[
-        "garment",
-        pattern.to_str().unwrap(),
-        "--body",
-        body.to_str().unwrap(),
-        "-o",
-        dir.path().to_str().unwrap(),
-        "--json",
-    ]);
+    let (_dir, r) = garment_with_defaults(&root, "dress_pencil", "mean_female");
     let g = &r["garment"];
     let f = |k: &str| g[k].as_f64().unwrap();
     assert_eq!(r["drape"]["done"], true, "at rest: {}", r["drape"]);
