@@ -192,9 +192,10 @@ impl BlockSystem {
         let particles = &self.particles;
         let mat = SparseColMat::new_from_argsort(self.symbolic.clone(), &self.argsort, vals)
             .expect("the pattern's values");
-        // What `Llt::try_new_with_symbolic` and its solve do, in the kept buffers.
+        // What `Llt::try_new_with_symbolic` and its solve do, in the kept buffers (the factor is
+        // not cleared first: the supernodal factorisation clears it, the simplicial one writes
+        // every value; `tests/implicit.rs` compares the bits with a fresh factor's).
         let par = faer::get_global_parallelism();
-        self.factor.fill(0.0);
         let llt = (self.llt_symbolic)
             .factorize_numeric_llt(
                 &mut self.factor,
