@@ -489,6 +489,7 @@ fn a_run_hands_its_analysis_to_the_next_and_the_bits_stay_the_same() {
     let settings = SolverSettings::new(Integrator::ImplicitEuler);
     let go = |keep: bool| {
         let mut w = over_sphere(0.2, 0.02);
+        let mut serials = Vec::new();
         for run in 0..3 {
             if !keep {
                 w.analysis = Default::default();
@@ -498,8 +499,18 @@ fn a_run_hands_its_analysis_to_the_next_and_the_bits_stay_the_same() {
                 w.model.springs.iter_mut().for_each(|s| s.k *= 2.0);
             }
             sim::run_quiet(&mut w, &settings, Stop::Steps(10)).unwrap();
-            assert!(!w.analysis.is_empty(), "a finished run leaves its analysis");
+            serials.push(
+                w.analysis
+                    .serial()
+                    .expect("a finished run leaves its analysis"),
+            );
         }
+        // Kept: the first run's analysis served all three; fresh: each run analysed anew.
+        let distinct = serials
+            .iter()
+            .collect::<std::collections::BTreeSet<_>>()
+            .len();
+        assert_eq!(distinct, if keep { 1 } else { 3 }, "{serials:?}");
         w.state.x
     };
     let (kept, fresh) = (go(true), go(false));

@@ -33,6 +33,9 @@ enum Block {
 
 /// The fixed pattern, its symbolic factorisation and the scratch of the values.
 pub struct BlockSystem {
+    /// Which analysis this is (a number no other `BlockSystem` of the process has): tells a
+    /// kept analysis from a new one.
+    serial: u64,
     /// The blocks `(a, b)` of the pattern in visiting order: what a model must give to reuse
     /// this system (`fits`).
     blocks: Vec<(u32, u32)>,
@@ -100,7 +103,9 @@ impl BlockSystem {
                 .factorize_numeric_llt_scratch::<f64>(par, Default::default())
                 .or(llt_symbolic.solve_in_place_scratch::<f64>(1, par)),
         );
+        static SERIAL: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
         BlockSystem {
+            serial: SERIAL.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
             blocks,
             factor: vec![0.0; llt_symbolic.len_val()],
             scratch,
@@ -121,6 +126,11 @@ impl BlockSystem {
             blocks.push((a as u32, b as u32))
         });
         blocks
+    }
+
+    /// Which analysis this is (unique in the process).
+    pub fn serial(&self) -> u64 {
+        self.serial
     }
 
     /// Whether `model` has this system's pattern (the same particles joined and pinned; the
@@ -192,9 +202,11 @@ impl BlockSystem {
         let particles = &self.particles;
         let mat = SparseColMat::new_from_argsort(self.symbolic.clone(), &self.argsort, vals)
             .expect("the pattern's values");
-        // What `Llt::try_new_with_symbolic` and its solve do, in the kept buffers (the factor is
+        // What `Llt::try_new_with_symbolic` and its solve do, in the kept buffers. The factor is
         // not cleared first: the supernodal factorisation clears it, the simplicial one writes
-        // every value; `tests/implicit.rs` compares the bits with a fresh factor's).
+        // every value (the tests below compare the bits with faer's `Llt` after a factorisation
+        // of other values, in both). The scratch was sized for faer's global parallelism when
+        // the system was built; drapekit never changes it.
         let par = faer::get_global_parallelism();
         let llt = (self.llt_symbolic)
             .factorize_numeric_llt(
@@ -239,9 +251,10 @@ mod tests {
     use crate::cloth::pattern::{build, Pins};
     use crate::math::{Point2, Point3};
 
-    /// A 6 cm square of cotton at 2 cm spacing, flat, pinned at one corner or free.
-    fn square(pinned: bool) -> ClothModel {
-        let s = 0.03;
+    /// A square of cotton `half` m from its centre to a side, particles `spacing` apart, flat,
+    /// pinned at one corner or free; its positions.
+    fn sheet(half: f64, spacing: f64, pinned: bool) -> (ClothModel, Vec<Point3>) {
+        let s = half;
         let outline = [(-s, -s), (s, -s), (s, s), (-s, s)].map(|(x, y)| Point2::new(x, y));
         let pins = if pinned {
             Pins::at(&[Point2::new(-s, s)])
@@ -249,9 +262,60 @@ mod tests {
             Pins::default()
         };
         let fabric = Fabric::cotton();
-        let p = build(&outline, 0.02, &fabric, &pins).unwrap();
+        let p = build(&outline, spacing, &fabric, &pins).unwrap();
         let placed: Vec<Point3> = p.flat.iter().map(|q| Point3::new(q.x, q.y, 0.0)).collect();
-        ClothModel::assemble(&[("square".into(), p, fabric, placed)], Vec3::zeros()).0
+        ClothModel::assemble(&[("square".into(), p, fabric, placed)], Vec3::zeros())
+    }
+
+    /// A 6 cm square at 2 cm.
+    fn square(pinned: bool) -> ClothModel {
+        sheet(0.03, 0.02, pinned).0
+    }
+
+    #[test]
+    fn a_kept_factor_solves_to_the_bits_of_faers_own_cholesky() {
+        // faer factors a small system simplicially and a large one by supernodes; in both, a
+        // factorisation into the kept (not cleared) factor of an earlier one gives the bits of
+        // a fresh `Llt`.
+        use faer::linalg::solvers::Solve;
+        use faer::sparse::linalg::cholesky::SymbolicCholeskyRaw;
+        use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
+        for (half, supernodal) in [(0.03, false), (0.3, true)] {
+            let (model, x) = sheet(half, 0.01, false);
+            let mut sys = BlockSystem::new(&model);
+            let raw = sys.llt_symbolic.raw();
+            assert_eq!(
+                matches!(raw, SymbolicCholeskyRaw::Supernodal(_)),
+                supernodal
+            );
+            let hess: Vec<Matrix3<f64>> = (model.springs.iter())
+                .map(|s| s.hessian(&x[s.a as usize], &x[s.b as usize], true))
+                .collect();
+            let diag = vec![Matrix3::identity() * 1e3; model.len()];
+            let rhs: Vec<Vec3> = (0..model.len())
+                .map(|i| Vec3::new(1.0, -0.5, (i % 7) as f64 - 3.0))
+                .collect();
+            let mut delta = vec![Vec3::zeros(); model.len()];
+            sys.solve(&model, &diag, &hess, 3e-4, &rhs, &mut delta);
+            sys.solve(&model, &diag, &hess, 1e-4, &rhs, &mut delta);
+            let mat =
+                SparseColMat::new_from_argsort(sys.symbolic.clone(), &sys.argsort, &sys.values)
+                    .unwrap();
+            let symbolic = SymbolicLlt::try_new(sys.symbolic.as_ref(), Side::Lower).unwrap();
+            let llt = Llt::try_new_with_symbolic(symbolic, mat.as_ref(), Side::Lower).unwrap();
+            let mut b = Mat::<f64>::zeros(3 * model.len(), 1);
+            for (u, &i) in sys.particles.iter().enumerate() {
+                for c in 0..3 {
+                    b[(3 * u + c, 0)] = rhs[i as usize][c];
+                }
+            }
+            llt.solve_in_place(b.as_mut());
+            for (u, &i) in sys.particles.iter().enumerate() {
+                for c in 0..3 {
+                    assert_eq!(delta[i as usize][c].to_bits(), b[(3 * u + c, 0)].to_bits());
+                }
+            }
+        }
     }
 
     #[test]

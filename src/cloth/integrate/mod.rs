@@ -346,6 +346,11 @@ impl Analysis {
     pub fn is_empty(&self) -> bool {
         self.direct.is_none()
     }
+
+    /// Which direct analysis is kept (`direct::BlockSystem::serial`), if any.
+    pub fn serial(&self) -> Option<u64> {
+        self.direct.as_ref().map(|d| d.serial())
+    }
 }
 
 impl std::fmt::Debug for Analysis {
