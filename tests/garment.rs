@@ -2053,3 +2053,28 @@ fn dress_pencil_on_mean_female_drapes_clean_and_fails_only_the_strain_the_fit_ch
         "{worst}"
     );
 }
+
+#[test]
+fn bench_garments_summary_names_an_integrator_other_than_the_default() {
+    // A row sewn with projective dynamics says so; one with the default (implicit Euler) does
+    // not carry a label.
+    let Some(root) = common::realdata() else {
+        return;
+    };
+    let line = |extra: &[&str]| {
+        let root = root.to_str().unwrap();
+        let mut args = vec!["bench", "garment", "--realdata", root, "--only", "hoody"];
+        args.extend_from_slice(&["--spacing", "0.1", "--settle-max", "0.05"]);
+        args.extend_from_slice(extra);
+        let o = common::run(&args);
+        assert!(o.status.success());
+        common::text(&o).0.lines().next().unwrap().to_string()
+    };
+    let pd = line(&["--integrator", "projective-dynamics"]);
+    assert!(
+        pd.starts_with("hoody_mean on mean_all (projective-dynamics): "),
+        "{pd}"
+    );
+    let default = line(&[]);
+    assert!(default.starts_with("hoody_mean on mean_all: "), "{default}");
+}

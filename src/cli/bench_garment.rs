@@ -323,8 +323,8 @@ fn print_spread(rows: &[GarmentRow]) {
     );
 }
 
-/// One line per garment (its spacing named when `spacing`; implicit Euler named), then what
-/// failed.
+/// One line per garment (its spacing named when `spacing`; an integrator other than the
+/// garments' default named), then what failed.
 fn print_row(r: &GarmentRow, spacing: bool) {
     let at = if spacing {
         format!(" at {} cm", crate::math::short(r.spacing * 100.0))
@@ -340,10 +340,10 @@ fn print_row(r: &GarmentRow, spacing: bool) {
         } else {
             " (no rim hinges)"
         }
-        + if r.integrator == Integrator::ImplicitEuler {
-            " (implicit Euler)"
+        + &if r.integrator == gd::GARMENT_INTEGRATOR {
+            String::new()
         } else {
-            ""
+            format!(" ({})", r.integrator)
         };
     println!(
         "{} on {}{label}: {} particles; sewing {:.2} s ({:.1} s wall, gap {:.1} mm); drape \
