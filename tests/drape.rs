@@ -699,12 +699,21 @@ fn cape_dropped_over_the_shoulders_stays_outside_the_body() {
 
 /// A 20 cm square of `fabric`, spacing 2 cm, pinned at two corners, hanging free.
 fn probe_world(fabric: &Fabric, integrator: Integrator) -> World {
+    probe_world_pinned(fabric, integrator, true)
+}
+
+/// The probe, pinned at its top corners or (`pinned` false) falling free.
+fn probe_world_pinned(fabric: &Fabric, integrator: Integrator, pinned: bool) -> World {
     use drapekit::cloth::model::ClothModel;
     use drapekit::cloth::pattern::{self, Pins};
     use drapekit::math::Point2;
     let s = 0.1;
     let outline = [(-s, -s), (s, -s), (s, s), (-s, s)].map(|(x, y)| Point2::new(x, y));
-    let pins = Pins::at(&[Point2::new(-s, s), Point2::new(s, s)]);
+    let pins = if pinned {
+        Pins::at(&[Point2::new(-s, s), Point2::new(s, s)])
+    } else {
+        Pins::default()
+    };
     let p = pattern::build(&outline, 0.02, fabric, &pins).unwrap();
     let placed: Vec<Point3> = p.flat.iter().map(|q| Point3::new(q.x, 0.0, q.y)).collect();
     let (m, x) = ClothModel::assemble(
@@ -874,6 +883,88 @@ fn extremes_of_stiffness_and_step_are_either_stable_or_caught_as_the_estimate_sa
 }
 
 #[test]
+fn a_fabric_too_stiff_for_double_precision_is_refused_at_its_first_step_not_a_panic() {
+    // 1e30 N/m at 10 ms: k dt^2 / m about 1e31, where the implicit integrators' matrices (mass
+    // plus dt^2 times the springs) are singular in rounding. Each run is refused before its
+    // first step with the ratio, the piece and a step that would do, the state untouched.
+    let f = stiffness(1e30, 0.5);
+    for integrator in [Integrator::ImplicitEuler, Integrator::ProjectiveDynamics] {
+        let mut w = probe_world_pinned(&f, integrator, false);
+        let x0 = w.state.x.clone();
+        let settings = SolverSettings::new(integrator);
+        let r = sim::run_quiet(&mut w, &settings, Stop::Steps(10));
+        let Err(SimError::Singular {
+            step,
+            ref piece,
+            ratio,
+            hint,
+            dt,
+            ..
+        }) = r
+        else {
+            panic!("{integrator:?}: {r:?}");
+        };
+        assert_eq!((step, piece.as_str(), dt), (0, "probe", settings.dt));
+        let masses =
+            (w.model.mass.iter()).fold((f64::MAX, 0.0f64), |(lo, hi), &m| (lo.min(m), hi.max(m)));
+        let k_dt2 = 1e30 * dt * dt;
+        assert!(
+            ratio >= k_dt2 / masses.1 && ratio <= k_dt2 / masses.0,
+            "{ratio:e}"
+        );
+        assert!((hint * hint / (dt * dt) * ratio / sim::RATIO_HINT - 1.0).abs() < 1e-9);
+        let msg = r.unwrap_err().to_string();
+        for needle in [
+            "not positive definite",
+            "before its first step",
+            "piece 'probe'",
+            "softer fabric",
+        ] {
+            assert!(msg.contains(needle), "{needle}: {msg}");
+        }
+        assert_eq!(w.state.x, x0, "{integrator:?}");
+    }
+    // Just under the bound (k dt^2 / m = RATIO_MAX / 2, a million times cotton's at 1 cm) the
+    // same square is solved, falls freely as a whole (its springs unstretched) and stays
+    // finite; just over it, refused.
+    let dt = SolverSettings::new(Integrator::ImplicitEuler).dt;
+    let light = probe_world(&f, Integrator::ImplicitEuler)
+        .model
+        .mass
+        .iter()
+        .fold(f64::MAX, |a, &m| a.min(m));
+    for (scale, refused) in [(0.5, false), (2.0, true)] {
+        let k = scale * sim::RATIO_MAX * light / (dt * dt);
+        for integrator in [Integrator::ImplicitEuler, Integrator::ProjectiveDynamics] {
+            let mut w = probe_world_pinned(&stiffness(k, 0.5), integrator, false);
+            let x0 = w.state.x.clone();
+            let r = sim::run_quiet(&mut w, &SolverSettings::new(integrator), Stop::Steps(10));
+            assert_eq!(
+                matches!(r, Err(SimError::Singular { .. })),
+                refused,
+                "{integrator:?} {scale}: {r:?}"
+            );
+            if !refused {
+                assert!(r.is_ok(), "{integrator:?}: {r:?}");
+                let drop: Vec<f64> = (x0.iter().zip(&w.state.x))
+                    .map(|(a, b)| a.z - b.z)
+                    .collect();
+                let (lo, hi) = drop
+                    .iter()
+                    .fold((f64::MAX, f64::MIN), |(l, h), &d| (l.min(d), h.max(d)));
+                // Rounding alone tells the particles apart: at most the condition number (about
+                // 8 times k dt^2 / m) times the machine epsilon, relative.
+                let bound = 8.0 * scale * sim::RATIO_MAX * f64::EPSILON;
+                assert!(
+                    lo > 0.0 && hi - lo < bound * hi,
+                    "{integrator:?}: drops {lo} to {hi}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
 fn the_stability_check_is_a_run_option_on_by_default() {
     // The probe at 1.25 x the power iteration's step: unstable.
     let f = stiffness(1e4, 0.5);
@@ -938,6 +1029,42 @@ fn explicit_euler_needs_damping_and_a_step_below_its_estimate() {
     // Without damping it has no stable step.
     let undamped = probe_world(&stiffness(1.0, 0.0), Integrator::ExplicitEuler);
     assert_eq!(undamped.stable_step, 0.0);
+}
+
+#[test]
+fn a_fabric_too_stiff_for_the_solver_stops_the_cli_with_advice_and_leaves_nothing_behind() {
+    let tmp = scratch("singular");
+    let dir = tmp.path();
+    let scene = ribbon_variant(
+        dir,
+        &[
+            (
+                "integrator = \"leapfrog\"\ndt = 2e-4",
+                "integrator = \"implicit-euler\"",
+            ),
+            (RIBBON_STOP, "steps = 20"),
+            ("stretch = 50.0", "stretch = 1e30"),
+        ],
+        "",
+    );
+    let out = dir.join("out");
+    let o = drape_cli(&scene, &out, &[]);
+    let (_, err) = common::text(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    for needle in [
+        "implicit-euler step's matrix is not positive definite",
+        "before its first step",
+        "piece 'ribbon'",
+        "use a smaller dt",
+    ] {
+        assert!(err.contains(needle), "{needle}: {err}");
+    }
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(
+        !out.exists(),
+        "no output after a failed run: {:?}",
+        common::listing(dir)
+    );
 }
 
 #[test]

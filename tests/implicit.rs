@@ -132,7 +132,8 @@ fn projective_dynamics_never_raises_its_objective() {
                 v: &mut v1,
                 contact: &mut c1,
             },
-        );
+        )
+        .unwrap();
         let g = pd.trace.take().unwrap();
         assert_eq!(g.len(), 41);
         for k in 1..g.len() {
@@ -518,4 +519,49 @@ fn a_run_hands_its_analysis_to_the_next_and_the_bits_stay_the_same() {
     // The runs moved the cloth (the comparison is not of the start).
     let start = over_sphere(0.2, 0.02).state.x;
     assert!(kept.iter().zip(&start).any(|(a, b)| (a - b).norm() > 1e-3));
+}
+
+#[test]
+fn a_step_whose_matrix_fails_to_factor_is_an_error_not_a_panic() {
+    // One position not a number: the Hessians of its springs are too, implicit Euler's
+    // factorisation finds no positive pivot, and the step says so (`sim::run` turns it into
+    // `SimError::Singular`) instead of stopping the process.
+    let mut w = square(
+        &Fabric::cotton(),
+        0.02,
+        4.0,
+        false,
+        Integrator::ImplicitEuler,
+    );
+    w.state.x[7].x = f64::NAN;
+    let settings = SolverSettings::new(Integrator::ImplicitEuler);
+    let mut analysis = drapekit::cloth::integrate::Analysis::default();
+    let mut solver =
+        drapekit::cloth::integrate::make(&settings, &w.model, &w.state.x, &mut analysis);
+    let mut pred = sim::Predicted::default();
+    sim::predict(&w.model, &w.state, settings.dt, &mut pred);
+    let input = StepIn {
+        model: &w.model,
+        x: &w.state.x,
+        v: &w.state.v,
+        f_ext: &pred.f_ext,
+        y: &pred.y,
+        colliders: &[],
+        reach: &[],
+        dt: settings.dt,
+    };
+    let (mut x1, mut v1, mut c1) = (
+        w.state.x.clone(),
+        w.state.v.clone(),
+        w.state.contact.clone(),
+    );
+    let r = solver.step(
+        &input,
+        &mut StepOut {
+            x: &mut x1,
+            v: &mut v1,
+            contact: &mut c1,
+        },
+    );
+    assert!(r.is_err(), "{r:?}");
 }

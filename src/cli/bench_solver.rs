@@ -93,7 +93,11 @@ fn step_in<'a>(w: &'a World, pred: &'a sim::Predicted, dt: f64) -> StepIn<'a> {
 
 /// One solve phase of `settings` from `w`'s state: the new positions and the step's wall time
 /// (the solver built beforehand).
-fn one_step(w: &World, settings: &SolverSettings, trace: bool) -> (Vec<Point3>, f64, Vec<f64>) {
+fn one_step(
+    w: &World,
+    settings: &SolverSettings,
+    trace: bool,
+) -> anyhow::Result<(Vec<Point3>, f64, Vec<f64>)> {
     let pred = predicted(w, settings.dt);
     let input = step_in(w, &pred, settings.dt);
     let (mut x, mut v, mut c) = (
@@ -110,15 +114,15 @@ fn one_step(w: &World, settings: &SolverSettings, trace: bool) -> (Vec<Point3>, 
         let mut pd = ProjectiveDynamics::new(settings, &w.model, &w.state.x);
         pd.trace = trace.then(Vec::new);
         let t = Instant::now();
-        pd.step(&input, &mut out);
+        pd.step(&input, &mut out)?;
         let s = t.elapsed().as_secs_f64();
-        (x, s, pd.trace.take().unwrap_or_default())
+        Ok((x, s, pd.trace.take().unwrap_or_default()))
     } else {
         let fresh = &mut integrate::Analysis::default();
         let mut solver = integrate::make(settings, &w.model, &w.state.x, fresh);
         let t = Instant::now();
-        solver.step(&input, &mut out);
-        (x, t.elapsed().as_secs_f64(), Vec::new())
+        solver.step(&input, &mut out)?;
+        Ok((x, t.elapsed().as_secs_f64(), Vec::new()))
     }
 }
 
@@ -136,7 +140,7 @@ fn convergence(a: &SolverBench, say: &dyn Fn(String)) -> anyhow::Result<Vec<Conv
         newton_iterations: k,
         ..SolverSettings::new(Integrator::ImplicitEuler).with_dt(dt)
     };
-    let (best, ..) = one_step(&w, &newton(30), false);
+    let (best, ..) = one_step(&w, &newton(30), false)?;
     let g_star = objective(&w, dt, &best);
     let free: Vec<Point3> = w
         .state
@@ -161,7 +165,7 @@ fn convergence(a: &SolverBench, say: &dyn Fn(String)) -> anyhow::Result<Vec<Conv
         let mut times = Vec::new();
         let mut trace = Vec::new();
         for _ in 0..a.runs {
-            let (_, t, tr) = one_step(&w, &s, true);
+            let (_, t, tr) = one_step(&w, &s, true)?;
             times.push(t);
             trace = tr;
         }
@@ -184,7 +188,7 @@ fn convergence(a: &SolverBench, say: &dyn Fn(String)) -> anyhow::Result<Vec<Conv
         let mut times = Vec::new();
         let mut x = Vec::new();
         for _ in 0..a.runs {
-            let (p, t, _) = one_step(&w, &newton(k), false);
+            let (p, t, _) = one_step(&w, &newton(k), false)?;
             times.push(t);
             x = p;
         }

@@ -70,6 +70,50 @@ pub fn check_every(dt: f64) -> u64 {
 /// expensive ones) are neighbours in the numbering, and work stealing must spread them.
 pub const COLLISION_CHUNK: usize = 64;
 
+/// The largest `k dt^2 / m` (a spring's constant times the step squared over its lighter
+/// particle's mass) the implicit integrators accept: their matrices are `M + dt^2 K`, whose
+/// conditioning grows with it, and beyond about `1e15` the masses vanish in the rounding of
+/// 16 digits (a free piece's matrix is then singular). Real fabrics give 1e5 (cotton, 1 cm,
+/// 10 ms) to 1e7 (1 mm); a scene beyond this is refused before its first step.
+pub const RATIO_MAX: f64 = 1e12;
+
+/// The `k dt^2 / m` that [`SimError::Singular`]'s advice aims at.
+pub const RATIO_HINT: f64 = 1e10;
+
+/// The stiffest spring's `k dt^2 / m` (over its lighter particle) and its piece's name.
+pub fn stiffest(model: &ClothModel, dt: f64) -> (f64, String) {
+    let (ratio, a) = (model.springs.iter())
+        .map(|s| {
+            let m = model.mass[s.a as usize].min(model.mass[s.b as usize]);
+            (s.k * dt * dt / m, s.a as usize)
+        })
+        .fold((0.0, 0), |best, r| if r.0 > best.0 { r } else { best });
+    let piece = (model.pieces.iter())
+        .find(|p| (p.first..p.first + p.count).contains(&a))
+        .map_or_else(String::new, |p| p.name.clone());
+    (ratio, piece)
+}
+
+/// The error of a step whose matrix was not positive definite (step `step`, 1-based; 0:
+/// refused before the first).
+fn singular(model: &ClothModel, integrator: Integrator, dt: f64, step: u64) -> SimError {
+    let (ratio, piece) = stiffest(model, dt);
+    SimError::Singular {
+        step,
+        time: step as f64 * dt,
+        when: if step == 0 {
+            "before its first step".into()
+        } else {
+            format!("at step {step} (t = {:.4} s)", step as f64 * dt)
+        },
+        integrator,
+        dt,
+        piece,
+        ratio,
+        hint: dt * (RATIO_HINT / ratio).sqrt().min(1.0),
+    }
+}
+
 /// Errors of a run.
 #[derive(Debug, thiserror::Error)]
 pub enum SimError {
@@ -85,6 +129,22 @@ pub enum SimError {
         dt: f64,
         estimate: f64,
         advice: String,
+    },
+    /// The solver's matrix was not positive definite in double precision, or would not be
+    /// (`ratio` above [`RATIO_MAX`]: refused at step 0): a fabric far too stiff for the step
+    /// (`ratio`: the stiffest spring's `k dt^2 / m`).
+    #[error(
+        "the {integrator} step's matrix is not positive definite in double precision {when}: the stiffest spring (piece '{piece}') has k dt^2 / m = {ratio:.1e}, too many orders of magnitude above the particles' inertia for 16 digits; use a smaller dt (dt <= {hint:.1e} s brings it to {RATIO_HINT:.0e}) or a softer fabric"
+    )]
+    Singular {
+        step: u64,
+        time: f64,
+        when: String,
+        integrator: Integrator,
+        dt: f64,
+        piece: String,
+        ratio: f64,
+        hint: f64,
     },
     /// Writing a frame failed.
     #[error("writing frame {step}: {message}")]
@@ -657,6 +717,9 @@ pub fn run(
     let start = Instant::now();
     let dt = settings.dt;
     let integrator = settings.integrator;
+    if !integrator.is_explicit() && stiffest(&world.model, dt).0 > RATIO_MAX {
+        return Err(singular(&world.model, integrator, dt, 0));
+    }
     // Built from the world as loaded (a checkpoint's pinned particles are where they were).
     let mut solver: Box<dyn Solver> =
         integrate::make(settings, &world.model, &world.state.x, &mut world.analysis);
@@ -715,7 +778,9 @@ pub fn run(
                 v: &mut v_new,
                 contact: &mut state.contact,
             };
-            solver.step(&input, &mut out);
+            if solver.step(&input, &mut out).is_err() {
+                return Err(singular(model, integrator, dt, step));
+            }
             lp.stats.solve_seconds += t.elapsed().as_secs_f64();
             let t = Instant::now();
             // The work the collide phase does on the cloth (its projections can stretch springs

@@ -9,6 +9,7 @@
 //! keeps its normal motion within `1e-8` of zero relative to the tangential one: the direct
 //! equivalent of the conjugate gradients' filter.
 
+use super::NotPositiveDefinite;
 use crate::cloth::model::ClothModel;
 use crate::math::Vec3;
 use faer::dyn_stack::{MemBuffer, MemStack};
@@ -188,7 +189,7 @@ impl BlockSystem {
         h2: f64,
         rhs: &[Vec3],
         delta: &mut [Vec3],
-    ) {
+    ) -> Result<(), NotPositiveDefinite> {
         let vals = &mut self.values;
         vals.clear();
         Self::visit(model, &self.index, &self.particles, |a, b, block| {
@@ -218,7 +219,7 @@ impl BlockSystem {
                 MemStack::new(&mut self.scratch),
                 Default::default(),
             )
-            .expect("the implicit matrix is positive definite");
+            .map_err(|_| NotPositiveDefinite)?;
         for (u, &i) in particles.iter().enumerate() {
             for c in 0..3 {
                 self.rhs[(3 * u + c, 0)] = rhs[i as usize][c];
@@ -240,6 +241,7 @@ impl BlockSystem {
                 self.rhs[(3 * u + 2, 0)],
             );
         }
+        Ok(())
     }
 }
 
@@ -296,8 +298,10 @@ mod tests {
                 .map(|i| Vec3::new(1.0, -0.5, (i % 7) as f64 - 3.0))
                 .collect();
             let mut delta = vec![Vec3::zeros(); model.len()];
-            sys.solve(&model, &diag, &hess, 3e-4, &rhs, &mut delta);
-            sys.solve(&model, &diag, &hess, 1e-4, &rhs, &mut delta);
+            sys.solve(&model, &diag, &hess, 3e-4, &rhs, &mut delta)
+                .unwrap();
+            sys.solve(&model, &diag, &hess, 1e-4, &rhs, &mut delta)
+                .unwrap();
             let mat =
                 SparseColMat::new_from_argsort(sys.symbolic.clone(), &sys.argsort, &sys.values)
                     .unwrap();

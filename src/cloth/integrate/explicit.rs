@@ -4,7 +4,7 @@
 //! only, so particles advance independently, in parallel over fixed chunks; sliding particles
 //! get their force projected and friction applied first (`collide::contact::slide_force`).
 
-use super::{Integrator, SolveStats, Solver, StepIn, StepOut};
+use super::{Integrator, NotPositiveDefinite, SolveStats, Solver, StepIn, StepOut};
 use crate::cloth::forces;
 use crate::collide::contact;
 use crate::math::{Point3, Vec3};
@@ -55,7 +55,7 @@ impl Explicit {
 }
 
 impl Solver for Explicit {
-    fn step(&mut self, input: &StepIn, out: &mut StepOut) {
+    fn step(&mut self, input: &StepIn, out: &mut StepOut) -> Result<(), NotPositiveDefinite> {
         let StepIn {
             model,
             x,
@@ -89,6 +89,7 @@ impl Solver for Explicit {
                 }
             },
         );
+        Ok(())
     }
 
     fn stats(&self) -> SolveStats {

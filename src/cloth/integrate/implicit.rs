@@ -36,7 +36,7 @@ use super::saved::{ImplicitKept, Kept, SolverState};
 use super::{
     contact_friction, contact_normal, SolveStats, Solver, SolverSettings, StepIn, StepOut,
 };
-use super::{Analysis, LinearSolver};
+use super::{Analysis, LinearSolver, NotPositiveDefinite};
 use crate::cloth::elements::bend;
 use crate::cloth::forces;
 use crate::cloth::model::ClothModel;
@@ -211,7 +211,7 @@ impl ImplicitEuler {
 }
 
 impl Solver for ImplicitEuler {
-    fn step(&mut self, input: &StepIn, out: &mut StepOut) {
+    fn step(&mut self, input: &StepIn, out: &mut StepOut) -> Result<(), NotPositiveDefinite> {
         let StepIn {
             model,
             x,
@@ -260,7 +260,7 @@ impl Solver for ImplicitEuler {
             let res = match &mut self.direct {
                 Some(sys) => {
                     let t = std::time::Instant::now();
-                    sys.solve(model, &self.diag, hess, h2, &self.rhs, &mut self.delta);
+                    sys.solve(model, &self.diag, hess, h2, &self.rhs, &mut self.delta)?;
                     for (d, f) in self.delta.iter_mut().zip(&self.filter) {
                         *d = f.apply(*d);
                     }
@@ -298,6 +298,7 @@ impl Solver for ImplicitEuler {
                 self.finish(input, out, &ad);
             }
         }
+        Ok(())
     }
 
     fn stats(&self) -> SolveStats {

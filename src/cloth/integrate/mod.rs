@@ -27,6 +27,7 @@ pub mod anderson;
 pub mod cg;
 pub mod cholesky;
 pub mod direct;
+pub use cholesky::NotPositiveDefinite;
 pub mod etree;
 pub mod explicit;
 pub mod implicit;
@@ -303,8 +304,9 @@ pub struct SolveStats {
 
 /// An integrator with what it keeps between steps (a factorisation, scratch vectors).
 pub trait Solver: Send {
-    /// One solve phase from `input` into `out`.
-    fn step(&mut self, input: &StepIn, out: &mut StepOut);
+    /// One solve phase from `input` into `out`; fails when the step's matrix is not positive
+    /// definite in double precision (a fabric far too stiff for the step: `sim::run` says so).
+    fn step(&mut self, input: &StepIn, out: &mut StepOut) -> Result<(), NotPositiveDefinite>;
     /// Whether the collide phase should apply friction from the normal velocity it removes
     /// (integrators whose solve phase knows no contact).
     fn friction_in_collide(&self) -> bool {

@@ -80,7 +80,7 @@
 use super::cholesky::Cholesky;
 use super::saved::{Kept, ProjectiveKept, SolverState};
 use super::{contact_friction, contact_normal};
-use super::{SolveStats, Solver, SolverSettings, StepIn, StepOut};
+use super::{NotPositiveDefinite, SolveStats, Solver, SolverSettings, StepIn, StepOut};
 use crate::cloth::elements::{Spring, SpringKind};
 use crate::cloth::model::ClothModel;
 use crate::cloth::state::Contact;
@@ -125,6 +125,9 @@ pub struct ProjectiveDynamics {
     particle: Vec<u32>,
     /// The global matrix's factorisation (none without unknowns).
     chol: Option<Cholesky>,
+    /// Whether the last factorisation failed (the matrix not positive definite in double
+    /// precision: a fabric far too stiff for the step); the next step reports it.
+    singular: bool,
     /// The matrix's values without contacts, in the order of the pattern's pairs (the
     /// diagonal of unknown `u` first, at `u`).
     base: Vec<f64>,
@@ -231,6 +234,7 @@ impl ProjectiveDynamics {
             u: Vec::new(),
             accelerated: Vec::new(),
             stats: SolveStats::default(),
+            singular: false,
             trace: None,
         };
         pd.factor();
@@ -248,8 +252,7 @@ impl ProjectiveDynamics {
         for (u, &i) in self.particle.iter().enumerate() {
             self.values[u] += self.weight[i as usize];
         }
-        chol.factor(&self.values)
-            .expect("the global matrix is positive definite: masses are positive");
+        self.singular = chol.factor(&self.values).is_err();
         self.factored.clone_from(&self.weight);
         self.update.clear();
         self.stats.factorisations += 1;
@@ -651,7 +654,7 @@ impl ProjectiveDynamics {
 }
 
 impl Solver for ProjectiveDynamics {
-    fn step(&mut self, input: &StepIn, out: &mut StepOut) {
+    fn step(&mut self, input: &StepIn, out: &mut StepOut) -> Result<(), NotPositiveDefinite> {
         let StepIn { model, x, dt, .. } = *input;
         // From the free flight `x + h v`, not from `y`: near a pin, `y`'s fall of `h^2 g` can
         // stretch the springs far more than the step ever will. Particles in contact start
@@ -677,6 +680,9 @@ impl Solver for ProjectiveDynamics {
             self.weight.iter_mut().for_each(|w| *w = 0.0);
         }
         self.refresh_matrix();
+        if self.singular {
+            return Err(NotPositiveDefinite);
+        }
         if let Some(t) = &mut self.trace {
             t.clear();
             t.push(Self::objective(input, &self.p));
@@ -693,6 +699,9 @@ impl Solver for ProjectiveDynamics {
                 break;
             }
             self.refresh_matrix();
+            if self.singular {
+                return Err(NotPositiveDefinite);
+            }
             // One iteration spreads the change to the neighbours (3 iterations per round at 128
             // per side took 1.4 times the iterations for 0.1% less strain); the strain
             // tolerance, if any, asks for more.
@@ -715,6 +724,7 @@ impl Solver for ProjectiveDynamics {
             energy_budget(input, out);
         }
         self.stiffen(input, out.contact);
+        Ok(())
     }
 
     fn stats(&self) -> SolveStats {
