@@ -374,7 +374,14 @@ fn band_regions(
     outer: Vec<u32>,
     loops: Vec<Vec<u32>>,
 ) -> Vec<(Vec<u32>, Vec<Vec<u32>>)> {
-    let points = |lp: &[u32]| lp.iter().map(|&v| flat[v as usize]).collect::<Vec<_>>();
+    // On the points scaled by a power of two (exact), as `clean_outline` tests them: the area
+    // of an outline 1e-300 m across would underflow to zero.
+    let extent = flat
+        .iter()
+        .map(|q| q.x.abs().max(q.y.abs()))
+        .fold(0.0, f64::max);
+    let s = crate::mesh::clean::unit_scale(extent);
+    let points = |lp: &[u32]| lp.iter().map(|&v| flat[v as usize] * s).collect::<Vec<_>>();
     let area = |lp: &[u32]| crate::geom::signed_area2(&points(lp));
     let (rings, cw): (Vec<Vec<u32>>, Vec<Vec<u32>>) = std::iter::once(outer)
         .chain(loops)
@@ -387,7 +394,7 @@ fn band_regions(
         .map(|p| crate::geom::signed_area2(p))
         .collect();
     for lp in cw {
-        let q = flat[lp[0] as usize];
+        let q = flat[lp[0] as usize] * s;
         let home = (0..regions.len())
             .filter(|&k| crate::geom::contains(&shapes[k], &q))
             .min_by(|&a, &b| sizes[a].total_cmp(&sizes[b]))
@@ -1417,5 +1424,15 @@ mod tests {
                 "{scale:e}"
             );
         }
+    }
+
+    #[test]
+    fn an_outline_far_smaller_than_any_float_area_is_refused_not_a_panic() {
+        // 1e-300 m on a side: its area underflows; once scaled (as `clean_outline` tests it)
+        // the band is found, and its particles weigh nothing, which is refused.
+        let s = 1e-300;
+        let outline = [(0.0, 0.0), (s, 0.0), (s, s), (0.0, s)].map(|(x, y)| Point2::new(x, y));
+        let r = build(&outline, 0.05, &Fabric::cotton(), &Pins::default());
+        assert!(matches!(r, Err(PatternError::Massless { .. })), "{r:?}");
     }
 }

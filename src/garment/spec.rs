@@ -195,7 +195,17 @@ pub enum Problem {
         first: usize,
         second: usize,
     },
+    /// The pattern has no panels.
+    NoPanels,
+    /// A panel's size (the larger of its vertices' box diagonal and its longest edge, curves
+    /// included), in metres, outside [`PANEL_SIZE`].
+    PanelSize { panel: String, metres: f64 },
 }
+
+/// The sizes a garment panel may have, m: from a 1 mm tab to a 100 m awning. Beyond them
+/// the units or the coordinates are wrong (a pattern in metres read as centimetres is 100
+/// times too small, not this), and sampling its outline would not fit in memory.
+pub const PANEL_SIZE: [f64; 2] = [1e-3, 100.0];
 
 impl fmt::Display for Problem {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -264,6 +274,14 @@ impl fmt::Display for Problem {
                 first,
                 second,
             } => write!(f, "panel '{panel}' edge {edge} is in two stitches, {first} and {second}; an edge may be in one"),
+            NoPanels => write!(f, "pattern.panels is empty; a garment needs at least one panel"),
+            PanelSize { panel, metres } => write!(
+                f,
+                "panel '{panel}' is {} m across (its vertices' box or its longest edge, curves included, in metres by units_in_meter); a garment panel is {} m to {} m: check units_in_meter and the coordinates",
+                crate::math::short(*metres),
+                PANEL_SIZE[0],
+                PANEL_SIZE[1]
+            ),
         }
     }
 }
@@ -405,9 +423,12 @@ fn build(raw: RawSpec, problems: &mut Vec<Problem>) -> Pattern {
         .filter_map(|name| {
             by_name
                 .remove(name)
-                .map(|p| build_panel(name, p, relative, problems))
+                .map(|p| build_panel(name, p, relative, units, problems))
         })
         .collect();
+    if panels.is_empty() {
+        problems.push(Problem::NoPanels);
+    }
     let stitches = build_stitches(&raw.pattern.stitches, &panels, problems);
     Pattern {
         panels,
@@ -436,7 +457,13 @@ fn panel_order(raw: &RawPattern, problems: &mut Vec<Problem>) -> Vec<String> {
     order
 }
 
-fn build_panel(name: &str, raw: RawPanel, relative: bool, problems: &mut Vec<Problem>) -> Panel {
+fn build_panel(
+    name: &str,
+    raw: RawPanel,
+    relative: bool,
+    units: f64,
+    problems: &mut Vec<Problem>,
+) -> Panel {
     let before = problems.len();
     let vertices: Vec<Point2> = raw
         .vertices
@@ -463,10 +490,40 @@ fn build_panel(name: &str, raw: RawPanel, relative: bool, problems: &mut Vec<Pro
         check_arcs(&panel, problems);
         check_lengths(&panel, problems);
     }
+    if problems.len() == before && units.is_finite() && units > 0.0 {
+        check_size(&panel, units, problems);
+    }
     if problems.len() == before {
         check_self_crossing(&panel, problems);
     }
     panel
+}
+
+/// A panel whose size in metres is outside [`PANEL_SIZE`] (before anything samples it).
+fn check_size(panel: &Panel, units: f64, problems: &mut Vec<Problem>) {
+    let (lo, hi) = panel.vertices.iter().fold(
+        (
+            Point2::new(f64::MAX, f64::MAX),
+            Point2::new(f64::MIN, f64::MIN),
+        ),
+        |(lo, hi), v| (lo.inf(v), hi.sup(v)),
+    );
+    let mut size = (hi - lo).norm();
+    for edge in &panel.edges {
+        let length = edge.length(&panel.vertices);
+        size = if length.is_finite() {
+            size.max(length)
+        } else {
+            f64::INFINITY
+        };
+    }
+    let metres = size / units;
+    if !(PANEL_SIZE[0]..=PANEL_SIZE[1]).contains(&metres) {
+        problems.push(Problem::PanelSize {
+            panel: panel.name.clone(),
+            metres,
+        });
+    }
 }
 
 fn check_finite(name: &str, raw: &RawPanel, problems: &mut Vec<Problem>) {
@@ -1286,5 +1343,63 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn panels_of_absurd_size_and_patterns_without_panels_are_refused_before_any_sampling() {
+        // The 10 x 10 unit square is 14.14 units across: at 100 units a metre, 0.1414 m.
+        let size = |units: f64| {
+            let text = file(&[("a", square())], "[]", "").replace(
+                r#""units_in_meter": 100"#,
+                &format!(r#""units_in_meter": {units:e}"#),
+            );
+            parse(&text, Path::new("t.json"))
+                .err()
+                .map(|_| problems(&text))
+        };
+        assert_eq!(size(100.0), None);
+        for units in [1e-300, 1e-5, 1e300, 5e-324] {
+            let found = size(units).unwrap_or_else(|| panic!("units {units}: accepted"));
+            let expected = 200f64.sqrt() / units;
+            assert!(
+                matches!(&found[..], [Problem::PanelSize { panel, metres }]
+                    if panel == "a" && (*metres == expected || (metres - expected).abs() <= 1e-12 * expected)),
+                "units {units}: {found:?}"
+            );
+        }
+        // Just inside and just outside the bounds (units chosen so the square is that size).
+        for (metres, refused) in [
+            (1.01e-3, false),
+            (0.99e-3, true),
+            (99.0, false),
+            (101.0, true),
+        ] {
+            let units = 200f64.sqrt() / metres;
+            assert_eq!(size(units).is_some(), refused, "{metres} m");
+        }
+        // A curve can be far longer than its chord: a large arc of radius 1e10 units on a
+        // 10-unit chord, and a quadratic whose control point is 1e200 units out.
+        for curve in [
+            r#"{"type": "circle", "params": [1e10, 1, 1]}"#,
+            r#"{"type": "quadratic", "params": [[0.5, 1e200]]}"#,
+        ] {
+            let edges = SQUARE_EDGES.replacen(
+                r#"{"endpoints": [0, 1]}"#,
+                &format!(r#"{{"endpoints": [0, 1], "curvature": {curve}}}"#),
+                1,
+            );
+            let found = problems(&file(
+                &[("a", panel_json(SQUARE_VERTICES, &edges))],
+                "[]",
+                "",
+            ));
+            assert!(
+                matches!(&found[..], [Problem::PanelSize { metres, .. }] if *metres > 100.0),
+                "{curve}: {found:?}"
+            );
+        }
+        let found = problems(&file(&[], "[]", ""));
+        assert_eq!(found, vec![Problem::NoPanels]);
+        assert!(found[0].to_string().contains("at least one panel"));
     }
 }

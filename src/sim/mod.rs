@@ -80,24 +80,26 @@ pub const RATIO_MAX: f64 = 1e12;
 /// The `k dt^2 / m` that [`SimError::Singular`]'s advice aims at.
 pub const RATIO_HINT: f64 = 1e10;
 
-/// The stiffest spring's `k dt^2 / m` (over its lighter particle) and its piece's name.
-pub fn stiffest(model: &ClothModel, dt: f64) -> (f64, String) {
-    let (ratio, a) = (model.springs.iter())
+/// The stiffest spring's `k / m` (over its lighter particle), 1/s^2, and its piece's name:
+/// times `dt^2`, the ratio [`RATIO_MAX`] bounds.
+pub fn stiffest(model: &ClothModel) -> (f64, String) {
+    let (k_m, a) = (model.springs.iter())
         .map(|s| {
             let m = model.mass[s.a as usize].min(model.mass[s.b as usize]);
-            (s.k * dt * dt / m, s.a as usize)
+            (s.k / m, s.a as usize)
         })
         .fold((0.0, 0), |best, r| if r.0 > best.0 { r } else { best });
     let piece = (model.pieces.iter())
         .find(|p| (p.first..p.first + p.count).contains(&a))
         .map_or_else(String::new, |p| p.name.clone());
-    (ratio, piece)
+    (k_m, piece)
 }
 
 /// The error of a step whose matrix was not positive definite (step `step`, 1-based; 0:
 /// refused before the first).
 fn singular(model: &ClothModel, integrator: Integrator, dt: f64, step: u64) -> SimError {
-    let (ratio, piece) = stiffest(model, dt);
+    let (k_m, piece) = stiffest(model);
+    let ratio = k_m * dt * dt;
     SimError::Singular {
         step,
         time: step as f64 * dt,
@@ -110,7 +112,8 @@ fn singular(model: &ClothModel, integrator: Integrator, dt: f64, step: u64) -> S
         dt,
         piece,
         ratio,
-        hint: dt * (RATIO_HINT / ratio).sqrt().min(1.0),
+        // From k / m, not the ratio: a step of 1e300 s squares to infinity.
+        hint: (RATIO_HINT / k_m).sqrt().min(dt),
     }
 }
 
@@ -717,7 +720,7 @@ pub fn run(
     let start = Instant::now();
     let dt = settings.dt;
     let integrator = settings.integrator;
-    if !integrator.is_explicit() && stiffest(&world.model, dt).0 > RATIO_MAX {
+    if !integrator.is_explicit() && stiffest(&world.model).0 * dt * dt > RATIO_MAX {
         return Err(singular(&world.model, integrator, dt, 0));
     }
     // Built from the world as loaded (a checkpoint's pinned particles are where they were).
