@@ -965,6 +965,24 @@ fn a_fabric_too_stiff_for_double_precision_is_refused_at_its_first_step_not_a_pa
 }
 
 #[test]
+fn an_instability_at_an_absurd_step_is_reported_in_a_readable_line() {
+    // dt = 1e300 s: the time of step 16 is 1.6e301 s, written in four significant digits (it
+    // was every one of its 302 digits).
+    let e = SimError::Unstable {
+        step: 16,
+        time: 1.6e301,
+        reason: Instability::NonFinite,
+        integrator: Integrator::Leapfrog,
+        dt: 1e300,
+        estimate: 1e-4,
+        advice: "use dt <= 9e-5 s".into(),
+    };
+    let msg = e.to_string();
+    assert!(msg.contains("(t = 1.600e301 s, "), "{msg}");
+    assert!(msg.len() < 300, "{msg}");
+}
+
+#[test]
 fn the_stability_check_is_a_run_option_on_by_default() {
     // The probe at 1.25 x the power iteration's step: unstable.
     let f = stiffness(1e4, 0.5);

@@ -106,7 +106,10 @@ fn singular(model: &ClothModel, integrator: Integrator, dt: f64, step: u64) -> S
         when: if step == 0 {
             "before its first step".into()
         } else {
-            format!("at step {step} (t = {:.4} s)", step as f64 * dt)
+            format!(
+                "at step {step} (t = {} s)",
+                crate::math::short(step as f64 * dt)
+            )
         },
         integrator,
         dt,
@@ -122,7 +125,8 @@ fn singular(model: &ClothModel, integrator: Integrator, dt: f64, step: u64) -> S
 pub enum SimError {
     /// The run went unstable.
     #[error(
-        "the simulation went unstable at step {step} (t = {time:.4} s, {reason}) with {integrator} and dt = {dt:e} s; the largest stable step estimated for these fabrics and spacings is {estimate:.3e} s: {advice}"
+        "the simulation went unstable at step {step} (t = {} s, {reason}) with {integrator} and dt = {dt:e} s; the largest stable step estimated for these fabrics and spacings is {estimate:.3e} s: {advice}",
+        crate::math::short(*time)
     )]
     Unstable {
         step: u64,
