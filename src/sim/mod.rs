@@ -103,20 +103,21 @@ fn singular(model: &ClothModel, integrator: Integrator, dt: f64, step: u64) -> S
     SimError::Singular {
         step,
         time: step as f64 * dt,
-        when: if step == 0 {
-            "before its first step".into()
-        } else {
-            format!(
-                "at step {step} (t = {} s)",
-                crate::math::short(step as f64 * dt)
-            )
-        },
         integrator,
         dt,
         piece,
         ratio,
         // From k / m, not the ratio: a step of 1e300 s squares to infinity.
         hint: (RATIO_HINT / k_m).sqrt().min(dt),
+    }
+}
+
+/// Where a run stopped, for [`SimError::Singular`]: step 0 is before the first.
+fn when(step: u64, time: f64) -> String {
+    if step == 0 {
+        "before its first step".into()
+    } else {
+        format!("at step {step} (t = {} s)", crate::math::short(time))
     }
 }
 
@@ -141,12 +142,12 @@ pub enum SimError {
     /// (`ratio` above [`RATIO_MAX`]: refused at step 0): a fabric far too stiff for the step
     /// (`ratio`: the stiffest spring's `k dt^2 / m`).
     #[error(
-        "the {integrator} step's matrix is not positive definite in double precision {when}: the stiffest spring (piece '{piece}') has k dt^2 / m = {ratio:.1e}, too many orders of magnitude above the particles' inertia for 16 digits; use a smaller dt (dt <= {hint:.1e} s brings it to {RATIO_HINT:.0e}) or a softer fabric"
+        "the {integrator} step's matrix is not positive definite in double precision {}: the stiffest spring (piece '{piece}') has k dt^2 / m = {ratio:.1e}, too many orders of magnitude above the particles' inertia for 16 digits; use a smaller dt (dt <= {hint:.1e} s brings it to {RATIO_HINT:.0e}) or a softer fabric",
+        when(*step, *time)
     )]
     Singular {
         step: u64,
         time: f64,
-        when: String,
         integrator: Integrator,
         dt: f64,
         piece: String,
