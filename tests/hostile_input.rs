@@ -89,6 +89,28 @@ fn hostile_tiny_step_with_a_duration_is_refused() {
 }
 
 #[test]
+fn hostile_tiny_steps_are_refused_for_every_integrator_even_with_a_step_count() {
+    // 1e-300 s squares to 0: projective dynamics' weights m / dt^2 were infinite, and the run
+    // was reported as an instability. 1e-9 s is the shortest step a scene may ask for.
+    for integrator in ["projective-dynamics", "implicit-euler", "leapfrog"] {
+        for dt in ["1e-300", "9.9e-10"] {
+            drape_refused(
+                &[
+                    (
+                        "integrator = \"leapfrog\"\ndt = 1e-4",
+                        &format!("integrator = \"{integrator}\"\ndt = {dt}"),
+                    ),
+                    ("max_steps = 40000", "max_steps = 2"),
+                ],
+                &["key 'solver.dt'", "s is below 1e-9 s"],
+            );
+        }
+    }
+    // At the bound itself the scene runs (two steps).
+    drape_warnings(&[("dt = 1e-4", "dt = 1e-9")]);
+}
+
+#[test]
 fn hostile_step_counts_beyond_the_limit_are_refused() {
     drape_refused(
         &[("max_steps = 40000", "max_steps = 100000000000")],
@@ -358,13 +380,22 @@ fn tetra(s: f64) -> String {
 }
 
 #[test]
-fn hostile_tetrahedra_at_1e100_and_1e_minus_100_convert() {
+fn hostile_tetrahedra_at_1e100_and_1e_minus_100_convert_and_at_1e300_are_refused() {
     for s in [1e100, 1e-100, 1e300] {
         let (o, _dir, out) = convert_file("t.obj", tetra(s).as_bytes());
         let err = text(&o).1;
         assert!(!err.contains("collinear"), "{s}: {err}");
         if s == 1e300 {
-            continue; // beyond what a volume holds: an answer or an error, quickly
+            // Beyond what a volume holds: refused, naming the file, the line and the bound,
+            // and nothing written (its report would hold infinities).
+            assert_eq!(o.status.code(), Some(1), "{err}");
+            assert!(err.contains("t.obj"), "{err}");
+            assert!(
+                err.contains("t.obj:1: coordinate 1e300 is larger than 1e100 in magnitude"),
+                "{err}"
+            );
+            assert!(!out.exists());
+            continue;
         }
         assert_eq!(o.status.code(), Some(0), "{s}: {err}");
         let faces = std::fs::read_to_string(&out)

@@ -305,6 +305,9 @@ case_ "$R" "garment: an explicit integrator" garment tube_specification.json --b
 new
 sed 's/"front"/"..\/front"/g' "$fixtures/garments/tube_specification.json" >tube_specification.json
 case_ "Outputs stay where they belong" "garment: a panel named ../front with --panels" garment tube_specification.json --body no_such_body.obj -o out --panels
+new
+sed 's/\[0, 80, 30\]/[1e200, 80, 30]/' "$fixtures/garments/tube_specification.json" >tube_specification.json
+case_ "$R" "garment: a panel translated by 1e200" garment tube_specification.json --body no_such_body.obj -o out
 
 # Other reader errors: batch plans (tests/batch.rs).
 new
@@ -330,6 +333,7 @@ drape_case() { # drape_case CLASS KIND EDITS...: the sphere-drop scene edited, d
 drape_case "$B" "collision grid of 4096^3 cells" 'cells = "auto"=>cells = [4096, 4096, 4096]'
 grid=$n
 drape_case "$B" "a step of 1e-300 s with a duration" 'dt = 1e-4=>dt = 1e-300' 'until_rest = 1e-5            # J of kinetic energy\nmax_steps = 40000=>duration = 1.0'
+drape_case "$B" "a step of 1e-300 s with a step count" 'dt = 1e-4=>dt = 1e-300' 'until_rest = 1e-5            # J of kinetic energy\nmax_steps = 40000=>steps = 10'
 drape_case "$B" "1e11 steps" 'max_steps = 40000=>max_steps = 100000000000'
 drape_case "$B" "4e9 projective-dynamics iterations" 'integrator = "leapfrog"=>integrator = "projective-dynamics"\niterations = 4000000000'
 drape_case "$B" "Newton and CG iteration counts" 'integrator = "leapfrog"=>integrator = "implicit-euler"\nnewton_iterations = 101\ncg_max_iterations = 4294967295'

@@ -710,6 +710,13 @@ fn check_solver(s: &SolverOverrides, p: &mut Problems) {
         );
     }
     positive(p, "solver.dt", s.dt);
+    if let Some(dt) = s.dt.filter(|&dt| dt > 0.0 && dt < scene::DT_MIN) {
+        let dt = crate::math::short(dt);
+        p.add(
+            "solver.dt",
+            format!("{dt} s is below {:e} s", scene::DT_MIN),
+        );
+    }
     positive(p, "solver.duration", s.duration);
     positive(p, "solver.until_rest", s.until_rest);
     integrator(p, "solver.integrator", s.integrator.as_deref());

@@ -200,12 +200,24 @@ pub enum Problem {
     /// A panel's size (the larger of its vertices' box diagonal and its longest edge, curves
     /// included), in metres, outside [`PANEL_SIZE`].
     PanelSize { panel: String, metres: f64 },
+    /// A panel placed (its translation, or a vertex) farther than [`PANEL_REACH`] from the
+    /// pattern's origin, in metres.
+    PanelFar {
+        panel: String,
+        what: String,
+        metres: f64,
+    },
 }
 
 /// The sizes a garment panel may have, m: from a 1 mm tab to a 100 m awning. Beyond them
 /// the units or the coordinates are wrong (a pattern in metres read as centimetres is 100
 /// times too small, not this), and sampling its outline would not fit in memory.
 pub const PANEL_SIZE: [f64; 2] = [1e-3, 100.0];
+
+/// How far from the pattern's origin a panel's translation or vertex may be, m. A garment
+/// is placed round a body at the origin; a panel a kilometre away is a wrong translation,
+/// and at 1e200 m its particles' positions would lose every digit of the cloth's spacing.
+pub const PANEL_REACH: f64 = 1e3;
 
 impl fmt::Display for Problem {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -281,6 +293,11 @@ impl fmt::Display for Problem {
                 crate::math::short(*metres),
                 PANEL_SIZE[0],
                 PANEL_SIZE[1]
+            ),
+            PanelFar { panel, what, metres } => write!(
+                f,
+                "panel '{panel}' {what} is {} m from the origin (in metres by units_in_meter); a garment panel is placed within {PANEL_REACH} m of the body: check the translation and units_in_meter",
+                crate::math::short(*metres),
             ),
         }
     }
@@ -493,6 +510,9 @@ fn build_panel(
     if problems.len() == before && units.is_finite() && units > 0.0 {
         check_size(&panel, units, problems);
     }
+    if problems.len() == before && units.is_finite() && units > 0.0 {
+        check_reach(&panel, units, problems);
+    }
     if problems.len() == before {
         check_self_crossing(&panel, problems);
     }
@@ -524,6 +544,36 @@ fn check_size(panel: &Panel, units: f64, problems: &mut Vec<Problem>) {
             metres,
         });
     }
+}
+
+/// A panel whose translation or a vertex is farther than [`PANEL_REACH`] from the origin.
+fn check_reach(panel: &Panel, units: f64, problems: &mut Vec<Problem>) {
+    let mut far = |what: String, length: f64| {
+        let metres = length / units;
+        if metres > PANEL_REACH {
+            problems.push(Problem::PanelFar {
+                panel: panel.name.clone(),
+                what,
+                metres,
+            });
+        }
+    };
+    far("translation".into(), length(panel.translation.as_slice()));
+    let farthest = (panel.vertices.iter().map(|v| length(v.coords.as_slice())))
+        .enumerate()
+        .max_by(|a, b| a.1.total_cmp(&b.1));
+    if let Some((k, d)) = farthest {
+        far(format!("vertex {k}"), d);
+    }
+}
+
+/// The Euclidean length of `c`, scaled so that 1e200 does not overflow when squared.
+fn length(c: &[f64]) -> f64 {
+    let s = c.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    if s == 0.0 {
+        return 0.0;
+    }
+    s * c.iter().map(|x| (x / s).powi(2)).sum::<f64>().sqrt()
 }
 
 fn check_finite(name: &str, raw: &RawPanel, problems: &mut Vec<Problem>) {
@@ -1401,5 +1451,40 @@ mod tests {
         let found = problems(&file(&[], "[]", ""));
         assert_eq!(found, vec![Problem::NoPanels]);
         assert!(found[0].to_string().contains("at least one panel"));
+    }
+
+    #[test]
+    fn panels_placed_beyond_a_kilometre_are_refused_by_translation_or_vertex() {
+        // At 100 units a metre, 1 km is 1e5 units.
+        let placed = |translation: &str, vertices: &str| {
+            let panel = panel_json(vertices, SQUARE_EDGES)
+                .replace("[1, 2, 3]", translation);
+            let text = file(&[("a", panel)], "[]", "");
+            parse(&text, Path::new("t.json")).err().map(|_| problems(&text))
+        };
+        // A 10-unit square with its first corner at (x, x) units.
+        let square_at = |x: f64| {
+            let c = [(0.0, 0.0), (10.0, 0.0), (10.0, 10.0), (0.0, 10.0)]
+                .map(|(a, b)| format!("[{}, {}]", x + a, x + b));
+            format!("[{}]", c.join(", "))
+        };
+        assert_eq!(placed("[0, 0, 99000]", SQUARE_VERTICES), None);
+        assert_eq!(placed("[0, 0, 0]", &square_at(-7e4)), None); // 990 m
+        for (translation, metres) in [("[0, 0, 101000]", 1010.0), ("[1e200, 0, 0]", 1e198)] {
+            let found = placed(translation, SQUARE_VERTICES).expect(translation);
+            assert!(
+                matches!(&found[..], [Problem::PanelFar { panel, what, metres: m }]
+                    if panel == "a" && what == "translation" && (m - metres).abs() <= 1e-9 * metres),
+                "{translation}: {found:?}"
+            );
+            assert!(found[0].to_string().contains("within 1000 m of the body"));
+        }
+        // A small panel whose vertices are all far out (its box is 14 cm across): the
+        // farthest vertex is named.
+        let found = placed("[0, 0, 0]", &square_at(1e8)).expect("far vertices");
+        assert!(
+            matches!(&found[..], [Problem::PanelFar { what, .. }] if what == "vertex 2"),
+            "{found:?}"
+        );
     }
 }

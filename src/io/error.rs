@@ -37,6 +37,9 @@ pub enum ProblemKind {
     /// NaN or infinity where a coordinate belongs.
     #[error("'{token}' is not a finite number: NaN and infinity are not coordinates")]
     NonFinite { token: String },
+    /// A coordinate too large for the mesh's volumes to be computed (`text::COORDINATE_MAX`).
+    #[error("coordinate {value:e} is larger than {max:e} in magnitude: the mesh's volumes would overflow double precision (rescale it)")]
+    TooLarge { value: f64, max: f64 },
     /// A vertex-triples line with the wrong number of numbers.
     #[error(
         "expected 3 numbers (a point), 9 (a triangle) or 12 (a quad) on a line, found {found}"

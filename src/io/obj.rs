@@ -163,7 +163,7 @@ impl State {
         let mut found = 0;
         let mut bad = false;
         for tok in w.take(3) {
-            match text::number(tok) {
+            match text::coordinate(tok) {
                 Ok(v) => xyz[found] = v,
                 Err(k) => {
                     self.problems.line(ln, k);

@@ -532,6 +532,7 @@ fn coordinate(v: f64, t: Scalar) -> Result<(), ProblemKind> {
     if !v.is_finite() {
         return Err(ProblemKind::BinaryNonFinite { value: v });
     }
+    super::text::within(v)?;
     if t == Scalar::F32 && v.abs() > f64::from(f32::MAX) {
         return Err(ProblemKind::PlyFloatRange {
             value: v,

@@ -343,7 +343,7 @@ fn read_ascii(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<ReadOutpu
                             },
                         )
                     })?;
-                    *c = text::number(v).map_err(|k| err(vl, k))?;
+                    *c = text::coordinate(v).map_err(|k| err(vl, k))?;
                 }
                 ring.push(ix.index(Point3::new(p[0], p[1], p[2])));
             }

@@ -185,6 +185,30 @@ pub fn number(token: &[u8]) -> Result<f64, ProblemKind> {
     }
 }
 
+/// The largest coordinate magnitude a mesh may have: beyond it the mesh's volumes (cubes of
+/// its lengths, summed over its faces) overflow double precision and its reports would hold
+/// infinities.
+pub const COORDINATE_MAX: f64 = 1e100;
+
+/// Parses a coordinate: a finite `f64` ([`number`]) of magnitude at most [`COORDINATE_MAX`].
+#[inline]
+pub fn coordinate(token: &[u8]) -> Result<f64, ProblemKind> {
+    let v = number(token)?;
+    within(v)
+}
+
+/// `v` when its magnitude is at most [`COORDINATE_MAX`].
+#[inline]
+pub fn within(v: f64) -> Result<f64, ProblemKind> {
+    if v.abs() > COORDINATE_MAX {
+        return Err(ProblemKind::TooLarge {
+            value: v,
+            max: COORDINATE_MAX,
+        });
+    }
+    Ok(v)
+}
+
 /// Splits on ASCII whitespace.
 #[inline]
 pub fn words(line: &[u8]) -> impl Iterator<Item = &[u8]> {
@@ -218,6 +242,15 @@ mod tests {
             assert_eq!(number(s.as_bytes()), Ok(v));
         }
         assert!(matches!(number(b"nan"), Err(ProblemKind::NonFinite { .. })));
+        assert_eq!(coordinate(b"-1e100"), Ok(-1e100));
+        assert!(matches!(
+            coordinate(b"1.1e100"),
+            Err(ProblemKind::TooLarge { .. })
+        ));
+        assert!(matches!(
+            coordinate(b"-1e308"),
+            Err(ProblemKind::TooLarge { .. })
+        ));
         assert!(matches!(
             number(b"-inf"),
             Err(ProblemKind::NonFinite { .. })

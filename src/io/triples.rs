@@ -220,7 +220,7 @@ fn numbers_of(line: &[u8], out: &mut Vec<f64>) -> Result<(), ProblemKind> {
                     i += 1;
                 }
                 let tok = &line[start..i];
-                out.push(text::number(tok).map_err(|k| match k {
+                out.push(text::coordinate(tok).map_err(|k| match k {
                     ProblemKind::NotANumber { .. } => ProblemKind::NotANumber { token: show(tok) },
                     k => k,
                 })?);
