@@ -8,9 +8,40 @@ use drapekit::garment::drape::{
 };
 use drapekit::garment::measure::measures;
 use drapekit::garment::parse;
+use drapekit::garment::transfer::transfer;
 use drapekit::math::{Point3, Vec3};
 use drapekit::mesh::TriMesh;
 use std::path::Path;
+
+/// The largest of `edges`' stretch (length over rest length, less 1) at positions `x`.
+fn largest_stretch(m: &drapekit::cloth::ClothModel, x: &[Point3]) -> f64 {
+    (m.triangles.iter())
+        .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
+        .map(|(a, b)| {
+            let (a, b) = (a as usize, b as usize);
+            (x[a] - x[b]).norm() / (m.rest[a] - m.rest[b]).norm() - 1.0
+        })
+        .fold(f64::MIN, f64::max)
+}
+
+/// The largest singular value, less 1, of the map from the flat pattern to positions `x`
+/// over `m`'s triangles.
+fn largest_principal_stretch(m: &drapekit::cloth::ClothModel, x: &[Point3]) -> f64 {
+    (m.triangles.iter())
+        .map(|t| {
+            let [a, b, c] = t.map(|i| i as usize);
+            let (e1, e2) = (x[b] - x[a], x[c] - x[a]);
+            let (q1, q2) = (m.rest[b] - m.rest[a], m.rest[c] - m.rest[a]);
+            let det = q1.x * q2.y - q2.x * q1.y;
+            // F = [e1 e2] Q^-1, Q = [q1 q2]: its columns F_x and F_y.
+            let fx = (e1 * q2.y - e2 * q1.y) / det;
+            let fy = (e2 * q1.x - e1 * q2.x) / det;
+            let (p, q, r) = (fx.dot(&fx), fx.dot(&fy), fy.dot(&fy));
+            let top = 0.5 * (p + r) + (0.25 * (p - r) * (p - r) + q * q).sqrt();
+            top.sqrt() - 1.0
+        })
+        .fold(f64::MIN, f64::max)
+}
 
 /// Two 60 x 40 cm panels (cm, y up), one 30 cm in front of the y axis, the other 30 cm behind
 /// it and turned to face back, sewn along both sides: a tube of perimeter 120 cm
@@ -134,6 +165,80 @@ fn a_tube_sewn_round_a_cylinder_closes_and_is_round() {
         (mean - round).abs() < 1e-3,
         "mean radius {mean} against {round}"
     );
+}
+
+#[test]
+fn a_tube_sewn_coarse_carries_its_closed_seams_and_its_shape_onto_the_fine_cloth() {
+    let pattern = parse(&tube(), Path::new("tube.json")).unwrap();
+    let body = || vec![body_collider(common::cylinder(0.186, 0.5, 1.5, 48))];
+    let mut coarse = GarmentSettings::default();
+    coarse.assemble.spacing = 0.04;
+    let GarmentWorld {
+        mut world, seams, ..
+    } = garment_world(&pattern, body(), &coarse).unwrap();
+    let report = sew(&mut world, &seams, None, &coarse, &|_| {}, None).unwrap();
+    assert!(report.done, "{report:?}");
+    let mut settings = coarse.clone();
+    settings.assemble.spacing = 0.01;
+    let fine = garment_world(&pattern, body(), &settings).unwrap();
+    assert!(fine.world.model.len() > 10 * world.model.len());
+    let gap = |x: &[Point3], seams: &[drapekit::garment::assemble::SeamPair]| {
+        (seams.iter())
+            .map(|s| (x[s.a as usize] - x[s.b as usize]).norm())
+            .fold(0.0, f64::max)
+    };
+    assert!(gap(&fine.world.state.x, &fine.seams) > 0.1, "placed apart");
+    let x = transfer(&world.model, &world.state.x, &fine.world.model);
+    // Each fine pair lies on the two coarse sides at the same fraction of their length: as
+    // close as the coarse sides are (straight edges of equal length here).
+    // Each fine pair lies on the two coarse sides at the same height (the edges are straight
+    // and run opposite ways), where the sides are straight lines between their particles:
+    // its gap is at most the widest of the coarse sides' gaps at their particles (paired by
+    // a seam spring or not: the outline has particles between the stitch's samples).
+    let xc = &world.state.x;
+    let m = &world.model;
+    // Piece `p`'s particles on its outline at flat x = `at`, by height.
+    let side = |p: usize, at: f64| {
+        let r = m.pieces[p].first..m.pieces[p].first + m.pieces[p].count;
+        let mut v: Vec<usize> = r.filter(|&i| (m.rest[i].x - at).abs() < 1e-9).collect();
+        v.sort_by(|&i, &j| m.rest[i].y.total_cmp(&m.rest[j].y));
+        v
+    };
+    let mut bound = 0.0f64;
+    for (a, b) in [(side(0, 0.3), side(1, -0.3)), (side(0, -0.3), side(1, 0.3))] {
+        assert_eq!(a.len(), b.len());
+        assert!(
+            a.len() > seams.len() / 2,
+            "the outline has particles between the samples"
+        );
+        for (i, j) in a.into_iter().zip(b) {
+            assert!((m.rest[i].y - m.rest[j].y).abs() < 1e-12);
+            bound = bound.max((xc[i] - xc[j]).norm());
+        }
+    }
+    let fine_gap = gap(&x, &fine.seams);
+    assert!(fine_gap <= bound + 1e-12, "{fine_gap} against {bound}");
+    assert!(bound < 2e-3, "the coarse sides are sewn: {bound}");
+    // The same map from the flat pattern, linear on each coarse triangle: no fine edge is
+    // stretched more than the largest principal stretch of the coarse triangles (an edge
+    // inside one is stretched by at most its map's largest singular value; an edge across
+    // several maps onto a path no longer than that).
+    let f = largest_stretch(&fine.world.model, &x);
+    let c = largest_principal_stretch(&world.model, &world.state.x);
+    assert!(f <= c + 1e-9, "fine {f} against coarse {c}");
+    // And on the cylinder: the mid-height ring's mean radius is the coarse ring's.
+    let ring = |m: &drapekit::cloth::ClothModel, x: &[Point3], h: f64| {
+        let r: Vec<f64> = (x.iter().zip(&m.rest))
+            .filter(|(p, _)| (p.z - 1.0).abs() < 0.5 * h)
+            .map(|(p, _)| Vec3::new(p.x, p.y, 0.0).norm())
+            .collect();
+        r.iter().sum::<f64>() / r.len() as f64
+    };
+    let (rc, rf) = (
+        ring(&world.model, &world.state.x, 0.04),
+        ring(&fine.world.model, &x, 0.01),
+    );
+    assert!((rc - rf).abs() < 2e-3, "{rc} against {rf}");
 }
 
 /// Two 60 x 40 cm panels 15 cm in front of and behind a horizontal bar (a shoulder), sewn
@@ -1036,6 +1141,53 @@ fn refused_before_work(pattern: &str, extra: &[&str]) -> (bool, String, bool) {
     let (_, stderr) = common::text(&o);
     let wrote = out.exists() || dir.path().join("front.obj").exists();
     (!o.status.success(), stderr, wrote)
+}
+
+#[test]
+fn the_garment_command_sews_coarse_and_drapes_fine_when_asked() {
+    let body = common::cylinder(0.186, 0.5, 1.5, 48);
+    let (_dir, r, _) = pattern_on(
+        &tube(),
+        &body,
+        &["--settle-max", "0.3", "--sew-spacing", "0.04"],
+    );
+    let (n, sewn) = (
+        r["particles"].as_u64().unwrap(),
+        r["sew_particles"].as_u64().unwrap(),
+    );
+    assert_eq!(
+        r["sew_spacing"].as_f64(),
+        Some(0.04),
+        "{}",
+        r["sew_spacing"]
+    );
+    // Half the spacing, a quarter of the particles (within the outline's band).
+    assert!(3 * sewn < n && 5 * sewn > n, "{sewn} sewn, {n} draped");
+    assert!(r["sew"]["done"].as_bool().unwrap(), "{}", r["sew"]);
+    let g = &r["garment"];
+    assert!(g["seam_gap_max_mm"].as_f64().unwrap() <= 1.0, "{g}");
+    assert_eq!(g["particles_inside"], 0, "{g}");
+    assert_eq!(g["body_crossing_edges"], 0, "{g}");
+    // Off by default: sewn at the drape's spacing.
+    let (_dir, r, _) = tube_on(&body, &[]);
+    assert_eq!(r["sew_particles"], r["particles"]);
+    assert_eq!(r["sew_spacing"].as_f64(), Some(0.02));
+    // Finer than the drape, or not a number: refused before any work.
+    for (v, says) in [
+        (
+            "0.01",
+            "--sew-spacing 0.01: must be at least the spacing (0.02 m)",
+        ),
+        (
+            "fine",
+            "--sew-spacing fine: expected off or a spacing in metres",
+        ),
+    ] {
+        let (failed, stderr, wrote) =
+            refused_before_work(&tube(), &["--spacing", "0.02", "--sew-spacing", v]);
+        assert!(failed && !wrote, "{stderr}");
+        assert!(stderr.contains(says), "{stderr}");
+    }
 }
 
 #[test]

@@ -63,6 +63,10 @@ pub struct GarmentBench {
     /// they do: README, `bench garment`).
     #[arg(long)]
     pub no_rim_bending: bool,
+    /// Sew at a coarser spacing and drape at `--spacing`, as `garment --sew-spacing`; several,
+    /// comma-separated (`off,0.02`): each garment with each.
+    #[arg(long, default_value = "off", value_delimiter = ',', num_args = 1..)]
+    pub sew_spacing: Vec<String>,
 }
 
 /// The issue's runs: (pattern, body).
@@ -108,6 +112,8 @@ pub struct GarmentRow {
     pub rim_bending: bool,
     /// The integrator (`--integrator`).
     pub integrator: Integrator,
+    /// The spacing the garment was sewn at when coarser than `spacing` (`--sew-spacing`), m.
+    pub sew_spacing: Option<f64>,
     /// The verdict's measures of the whole garment.
     pub body_crossing_edges: usize,
     pub self_crossing_edges: usize,
@@ -135,6 +141,9 @@ pub fn run(a: GarmentBench) -> anyhow::Result<()> {
     settings.hold_waist = super::garment::hold_waist(&a.hold_waist)?;
     settings.assemble.rim_bending = !a.no_rim_bending;
     settings.solver.integrator = a.integrator;
+    let sew_spacings = (a.sew_spacing.iter())
+        .map(|v| super::garment::sew_spacing(v))
+        .collect::<anyhow::Result<Vec<_>>>()?;
     if let Some(p) = settings
         .problems()
         .into_iter()
@@ -158,11 +167,14 @@ pub fn run(a: GarmentBench) -> anyhow::Result<()> {
             let at = rows.len();
             for seed in (0..a.seeds).map(|k| (k > 0).then_some(k)) {
                 settings.perturb = seed;
-                let row = run_one(&pattern, &body, (p, b), &settings)?;
-                if !a.json {
-                    print_row(&row, spacings.len() > 1);
+                for &sew in &sew_spacings {
+                    settings.sew_spacing = sew;
+                    let row = run_one(&pattern, &body, (p, b), &settings)?;
+                    if !a.json {
+                        print_row(&row, spacings.len() > 1);
+                    }
+                    rows.push(row);
                 }
-                rows.push(row);
             }
             if a.seeds > 1 && !a.json {
                 print_spread(&rows[at..]);
@@ -214,6 +226,7 @@ fn run_one(
         seed: settings.perturb,
         rim_bending: settings.assemble.rim_bending,
         integrator: settings.solver.integrator,
+        sew_spacing: (settings.sew_spacing).filter(|&s| s > settings.assemble.spacing),
         body_crossing_edges: j.whole.body_crossing_edges,
         self_crossing_edges: j.whole.self_crossing_edges,
         max_strain: j.whole.max_strain,
@@ -344,7 +357,10 @@ fn print_row(r: &GarmentRow, spacing: bool) {
             String::new()
         } else {
             format!(" ({})", r.integrator)
-        };
+        }
+        + &r.sew_spacing
+            .map(|s| format!(" (sewn at {} cm)", crate::math::short(s * 100.0)))
+            .unwrap_or_default();
     println!(
         "{} on {}{label}: {} particles; sewing {:.2} s ({:.1} s wall, gap {:.1} mm); drape \
          {:.2} s ({:.1} s wall, {}); {:.1} s wall in all; {}",

@@ -98,6 +98,11 @@ pub struct GarmentArgs {
     /// default such a panel is first moved out along its normal: `garment::clear`)
     #[arg(long)]
     pub keep_placement: bool,
+    /// Sew at this coarser spacing, m, then carry the sewn cloth onto `--spacing` for the
+    /// drape (`garment::transfer`), or `off`: sew at `--spacing` (the README's `bench
+    /// garment` measures both)
+    #[arg(long, default_value = "off", value_name = "M|off")]
+    pub sew_spacing: String,
 }
 
 /// The edges of `pattern` labelled as a waist (`garment::waist::WAIST_LABEL`).
@@ -117,6 +122,17 @@ pub(super) fn hold_waist(value: &str) -> anyhow::Result<crate::garment::drape::W
         v => match v.parse::<f64>() {
             Ok(z) if z.is_finite() => Ok(WaistHold::Level(z)),
             _ => bail!("--hold-waist {v}: expected off, auto or a height in metres"),
+        },
+    }
+}
+
+/// `--sew-spacing`'s value.
+pub(super) fn sew_spacing(value: &str) -> anyhow::Result<Option<f64>> {
+    match value {
+        "off" => Ok(None),
+        v => match v.parse::<f64>() {
+            Ok(s) => Ok(Some(s)),
+            _ => bail!("--sew-spacing {v}: expected off or a spacing in metres"),
         },
     }
 }
@@ -218,6 +234,12 @@ pub struct GarmentOutcome {
     pub held_waist: Option<gd::HoldReport>,
     /// Stage 1.
     pub sew: StageReport,
+    /// The particle spacing sewing ran at, in the output's units (m for the `garment`
+    /// command; coarser than the drape's with `--sew-spacing`).
+    pub sew_spacing: f64,
+    /// The particles of the cloth that was sewn (the drape's `particles` unless
+    /// `--sew-spacing` sewed a coarser cloth).
+    pub sew_particles: usize,
     /// The stitches sewing left open (wider than its 1 mm goal), widest first, as
     /// `open_seams`: where the drape's stiff seams had to pull them shut.
     pub sew_open_seams: Vec<measure::OpenSeam>,
@@ -304,6 +326,8 @@ pub(super) fn outcome(
             .collect(),
         held_waist: g.hold,
         sew: g.sew,
+        sew_spacing: g.sew_spacing * to_units,
+        sew_particles: g.sew_particles,
         sew_open_seams: in_mesh(g.sew_open, to_mesh),
         drape: g.drape,
     };
@@ -402,6 +426,7 @@ pub(super) fn settings(args: &GarmentArgs) -> anyhow::Result<GarmentSettings> {
     s.hold_waist = hold_waist(&args.hold_waist)?;
     s.perturb = args.perturb;
     s.clear_panels = !args.keep_placement;
+    s.sew_spacing = sew_spacing(&args.sew_spacing)?;
     s.assemble.rim_bending = !args.no_rim_bending;
     s.self_collision = (!args.no_self_collision).then(|| SelfCollisionOptions {
         friction: args.cloth_friction,
@@ -883,8 +908,16 @@ pub(super) fn print_outcome(r: &GarmentOutcome, wall_seconds: f64) {
             m.panel, m.particles_inside
         );
     }
+    let coarse = (r.sew_particles != r.particles).then(|| {
+        format!(
+            " at {} cm ({} particles, then carried onto the drape's cloth)",
+            crate::math::short(r.sew_spacing * 100.0),
+            r.sew_particles
+        )
+    });
     println!(
-        "  sewing: {:.2} s simulated ({}), largest seam gap {:.2} mm, seams at {} m/h^2",
+        "  sewing{}: {:.2} s simulated ({}), largest seam gap {:.2} mm, seams at {} m/h^2",
+        coarse.unwrap_or_default(),
         r.sew.time,
         if r.sew.done { "closed" } else { "NOT closed" },
         r.sew.seam_gap_max * 1e3,

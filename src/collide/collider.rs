@@ -10,7 +10,8 @@ use std::sync::OnceLock;
 /// The most cells along one axis the `auto` rule picks.
 pub const AUTO_MAX_CELLS: usize = 256;
 
-/// A rigid object the cloth collides with.
+/// A rigid object the cloth collides with. A clone has everything but the grid, which it
+/// builds again on first use with its own `margin`.
 #[derive(Debug)]
 pub struct Collider {
     /// Name (for reports).
@@ -167,5 +168,25 @@ impl Collider {
     #[inline]
     pub fn ring(&self, f: usize) -> &[u32] {
         &self.ring[self.ring_start[f] as usize..self.ring_start[f + 1] as usize]
+    }
+}
+
+impl Clone for Collider {
+    fn clone(&self) -> Self {
+        Collider {
+            name: self.name.clone(),
+            mesh: self.mesh.clone(),
+            planes: self.planes.clone(),
+            bbox: self.bbox,
+            ring_start: self.ring_start.clone(),
+            ring: self.ring.clone(),
+            dims: self.dims,
+            margin: self.margin,
+            friction: self.friction,
+            clearance: self.clearance,
+            closed: self.closed,
+            convex: self.convex.clone(),
+            grid: OnceLock::new(),
+        }
     }
 }

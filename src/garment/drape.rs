@@ -155,6 +155,10 @@ pub struct GarmentSettings {
     /// Move each panel placed through the first body out along its normal before sewing
     /// (`clear`; default on). Off: the panels are sewn where the pattern puts them.
     pub clear_panels: bool,
+    /// Sew at this particle spacing, m, then carry the sewn cloth onto the pattern at
+    /// `assemble.spacing` for the drape (`transfer`), when it is coarser than that spacing;
+    /// `None` (default): sew and drape at the same spacing.
+    pub sew_spacing: Option<f64>,
 }
 
 /// Where a garment's waist edges are held while sewing (`waist`).
@@ -219,6 +223,7 @@ impl Default for GarmentSettings {
             hold_waist: WaistHold::Off,
             perturb: None,
             clear_panels: true,
+            sew_spacing: None,
         }
     }
 }
@@ -255,6 +260,14 @@ impl GarmentSettings {
         let [lo, hi] = SPACING_RANGE;
         if !(h.is_finite() && (lo..=hi).contains(&h)) {
             bad("spacing", h, format!("must be {lo} to {hi} m"));
+        }
+        if let Some(s) = self.sew_spacing {
+            if !(s.is_finite() && (lo..=hi).contains(&s)) {
+                bad("sew_spacing", s, format!("must be {lo} to {hi} m"));
+            } else if s < h {
+                let m = format!("must be at least the spacing ({h} m): sewing is the coarse stage");
+                bad("sew_spacing", s, m);
+            }
         }
         let cloth_friction = self.self_collision.map_or(0.0, |o| o.friction);
         let clearance = self.body_clearance.unwrap_or(0.0);
@@ -326,6 +339,11 @@ pub struct Garment {
     pub hold: Option<HoldReport>,
     /// Stage 1.
     pub sew: StageReport,
+    /// The particle spacing the garment was sewn at, m (coarser than the drape's with
+    /// `GarmentSettings::sew_spacing`).
+    pub sew_spacing: f64,
+    /// The particles of the cloth that was sewn.
+    pub sew_particles: usize,
     /// The stitches still open wider than `seam_closed` when sewing ended (before the drape's
     /// stiff seams pulled them shut), widest first; in the simulation's frame.
     pub sew_open: Vec<super::measure::OpenSeam>,
@@ -531,6 +549,7 @@ pub fn sew(
     progress: &dyn Fn(f64),
     cancel: Option<&AtomicBool>,
 ) -> Result<StageReport, SimError> {
+    let mut weight = SEW_WEIGHT;
     let dt = settings.solver.dt;
     let chunk = ((settings.check_every / dt).round() as u64).max(1);
     world.model.gravity = Vec3::zeros();
@@ -542,7 +561,6 @@ pub fn sew(
     }
     let m = &world.model;
     let mean_mass = m.mass.iter().sum::<f64>() / m.len().max(1) as f64;
-    let mut weight = SEW_WEIGHT;
     set_seam_k(&mut world.model, weight * mean_mass / (dt * dt));
     let mut report = StageReport::default();
     let gaps = seam_gaps(seams, &world.state.x);
@@ -784,15 +802,30 @@ fn moved_fraction(before: &[Point3], after: &[Point3], limit: f64) -> f64 {
     moving as f64 / before.len().max(1) as f64
 }
 
-/// Sews and drapes `pattern` on `bodies` (as [`garment_world`]). Once `cancel` is set, the run
-/// ends after the step it is in with `SimError::Interrupted` (a garment keeps no checkpoint).
-pub fn sew_and_drape(
+/// A garment after sewing: its world, seams and what the sewing did.
+struct Sewn {
+    world: World,
+    seams: Vec<SeamPair>,
+    seam_k: f64,
+    edge_particles: Vec<Vec<Vec<u32>>>,
+    moved_out: Vec<MovedOut>,
+    hold: Option<HoldReport>,
+    sew: StageReport,
+    sew_open: Vec<super::measure::OpenSeam>,
+    /// The particles where they were placed (after `clear`), before any perturbation.
+    placed: Vec<Point3>,
+    /// The spacing sewn at, m, and the sewn cloth's particles.
+    sewn_at: (f64, usize),
+}
+
+/// Stage 1 of [`sew_and_drape`] at `settings.assemble.spacing`.
+fn sew_garment(
     pattern: &Pattern,
     bodies: Vec<Collider>,
     settings: &GarmentSettings,
     progress: &dyn Fn(f64),
     cancel: Option<&AtomicBool>,
-) -> Result<Garment, GarmentError> {
+) -> Result<Sewn, GarmentError> {
     let GarmentWorld {
         mut world,
         seams,
@@ -823,6 +856,83 @@ pub fn sew_and_drape(
     });
     let limit_mm = settings.seam_closed * 1e3;
     let sew_open = super::measure::open_seams(pattern, &seams, &world.state.x, limit_mm);
+    let sewn_at = (settings.assemble.spacing, world.model.len());
+    Ok(Sewn {
+        sewn_at,
+        world,
+        seams,
+        seam_k,
+        edge_particles,
+        moved_out,
+        hold,
+        sew: sew_report,
+        sew_open,
+        placed,
+    })
+}
+
+/// Stage 1 at the coarser `spacing`, then the sewn cloth carried onto the pattern at
+/// `settings.assemble.spacing` (`transfer`), at rest, ready for the drape. What the sewing
+/// reports (its seams still open, the hold, the panels moved out) is the coarse cloth's.
+fn sew_coarse(
+    pattern: &Pattern,
+    bodies: Vec<Collider>,
+    spacing: f64,
+    settings: &GarmentSettings,
+    progress: &dyn Fn(f64),
+    cancel: Option<&AtomicBool>,
+) -> Result<Sewn, GarmentError> {
+    let mut coarse = settings.clone();
+    coarse.assemble.spacing = spacing;
+    let sewn = sew_garment(pattern, bodies.clone(), &coarse, progress, cancel)?;
+    let fine = GarmentSettings {
+        hold_waist: WaistHold::Off,
+        ..settings.clone()
+    };
+    let GarmentWorld {
+        mut world,
+        seams,
+        seam_k,
+        edge_particles,
+        ..
+    } = garment_world(pattern, bodies, &fine)?;
+    let placed = world.state.x.clone();
+    world.state.x = super::transfer::transfer(&sewn.world.model, &sewn.world.state.x, &world.model);
+    Ok(Sewn {
+        world,
+        seams,
+        seam_k,
+        edge_particles,
+        placed,
+        ..sewn
+    })
+}
+
+/// Sews and drapes `pattern` on `bodies` (as [`garment_world`]). Once `cancel` is set, the run
+/// ends after the step it is in with `SimError::Interrupted` (a garment keeps no checkpoint).
+pub fn sew_and_drape(
+    pattern: &Pattern,
+    bodies: Vec<Collider>,
+    settings: &GarmentSettings,
+    progress: &dyn Fn(f64),
+    cancel: Option<&AtomicBool>,
+) -> Result<Garment, GarmentError> {
+    let coarse = (settings.sew_spacing).filter(|&s| s > settings.assemble.spacing);
+    let Sewn {
+        mut world,
+        seams,
+        seam_k,
+        edge_particles,
+        moved_out,
+        hold,
+        sew,
+        sew_open,
+        placed,
+        sewn_at,
+    } = match coarse {
+        Some(s) => sew_coarse(pattern, bodies, s, settings, progress, cancel)?,
+        None => sew_garment(pattern, bodies, settings, progress, cancel)?,
+    };
     let drape = settle(&mut world, &seams, seam_k, settings, cancel)?;
     let rings = super::hang::hang(pattern, &edge_particles, &placed, &world.state.x);
     Ok(Garment {
@@ -830,7 +940,9 @@ pub fn sew_and_drape(
         seams,
         moved_out,
         hold,
-        sew: sew_report,
+        sew,
+        sew_spacing: sewn_at.0,
+        sew_particles: sewn_at.1,
         sew_open,
         drape,
         rings,

@@ -27,6 +27,7 @@ pub mod perturb;
 pub mod sample;
 pub mod spec;
 pub mod spots;
+pub mod transfer;
 pub mod waist;
 
 pub use curve::Curve;
