@@ -1457,10 +1457,11 @@ mod tests {
     fn panels_placed_beyond_a_kilometre_are_refused_by_translation_or_vertex() {
         // At 100 units a metre, 1 km is 1e5 units.
         let placed = |translation: &str, vertices: &str| {
-            let panel = panel_json(vertices, SQUARE_EDGES)
-                .replace("[1, 2, 3]", translation);
+            let panel = panel_json(vertices, SQUARE_EDGES).replace("[1, 2, 3]", translation);
             let text = file(&[("a", panel)], "[]", "");
-            parse(&text, Path::new("t.json")).err().map(|_| problems(&text))
+            parse(&text, Path::new("t.json"))
+                .err()
+                .map(|_| problems(&text))
         };
         // A 10-unit square with its first corner at (x, x) units.
         let square_at = |x: f64| {
