@@ -11,6 +11,8 @@
 //! newton_iterations = 1            # implicit Euler: Newton steps per step (1: Baraff-Witkin; <= 100)
 //! cg_tolerance = 1e-6              # implicit Euler: relative residual of conjugate gradients
 //! cg_max_iterations = 1000         # implicit Euler (<= 100000)
+//! bending_hessian = "exact"        # implicit Euler: or "lumped", the bending pairs no spring
+//!                                  # joins moved onto the diagonal (faster; README)
 //! iterations = 10                  # projective dynamics: local/global iterations per step (<= 1000)
 //! anderson = 5                     # projective dynamics: Anderson acceleration's history (0: off)
 //! strain_band = 0.01               # projective dynamics: springs free within 1% of rest length
@@ -54,7 +56,9 @@ use crate::cloth::integrate::{Integrator, SolverSettings};
 use crate::cloth::pattern::{self, Pins};
 use crate::collide::grid::MAX_CELLS;
 use crate::garment::assemble::Placement;
-use crate::garment::drape::{GarmentSettings, WaistHold, GARMENT_INTEGRATOR, SEW_ITERATIONS};
+use crate::garment::drape::{
+    GarmentSettings, WaistHold, GARMENT_BENDING_HESSIAN, GARMENT_INTEGRATOR, SEW_ITERATIONS,
+};
 use crate::garment::Pattern;
 use crate::math::{short, Point2, Vec3};
 use crate::mesh::transform::{Units, Up};
@@ -182,6 +186,7 @@ struct SolverFile {
     newton_iterations: Option<u32>,
     cg_tolerance: Option<f64>,
     cg_max_iterations: Option<u32>,
+    bending_hessian: Option<String>,
     iterations: Option<u32>,
     chebyshev: Option<f64>,
     anderson: Option<u32>,
@@ -680,6 +685,12 @@ pub fn parse(text: &str, path: &Path) -> Result<Scene, SceneError> {
             );
         }
     }
+    if let Some(h) = &f.solver.bending_hessian {
+        match h.parse() {
+            Ok(h) => solver.bending_hessian = h,
+            Err(m) => bad("solver.bending_hessian", m),
+        }
+    }
     if let Some(b) = f.solver.strain_band {
         if b.is_finite() && (0.0..1.0).contains(&b) {
             solver.strain_band = Some(b);
@@ -757,6 +768,11 @@ pub fn parse(text: &str, path: &Path) -> Result<Scene, SceneError> {
         ),
         ("solver.cg_tolerance", s.cg_tolerance.is_some(), implicit),
         (
+            "solver.bending_hessian",
+            s.bending_hessian.is_some(),
+            implicit,
+        ),
+        (
             "solver.cg_max_iterations",
             s.cg_max_iterations.is_some(),
             implicit,
@@ -777,6 +793,12 @@ pub fn parse(text: &str, path: &Path) -> Result<Scene, SceneError> {
         ),
         ("solver.corrections", s.corrections.is_some(), projective),
     ];
+    // A [[garment]] scene that names no integrator runs the garments' own.
+    let integrator = if !f.garment.is_empty() && f.solver.integrator.is_none() {
+        GARMENT_INTEGRATOR
+    } else {
+        integrator
+    };
     for (key, given, owner) in owned {
         if given && integrator != owner {
             bad(
@@ -1286,6 +1308,9 @@ fn garment_spec(
     }
     if cx.solver_file.iterations.is_none() {
         settings.solver.iterations = SEW_ITERATIONS;
+    }
+    if cx.solver_file.bending_hessian.is_none() {
+        settings.solver.bending_hessian = GARMENT_BENDING_HESSIAN;
     }
     for p in settings.problems() {
         let key = match p.field {

@@ -1480,6 +1480,25 @@ fn bad_scenes_are_refused_naming_the_file_and_the_key() {
             "projective-dynamics",
         ],
     );
+    refused(
+        "bending_hessian_with_the_default",
+        &good().replace("steps = 10", "steps = 10\nbending_hessian = \"lumped\""),
+        &[
+            "solver.bending_hessian",
+            "integrator = \"implicit-euler\" only",
+        ],
+    );
+    refused(
+        "bending_hessian_unknown",
+        &good().replace(
+            "steps = 10",
+            "steps = 10\nintegrator = \"implicit-euler\"\nbending_hessian = \"diagonal\"",
+        ),
+        &[
+            "solver.bending_hessian",
+            "unknown bending Hessian 'diagonal': expected 'exact' or 'lumped'",
+        ],
+    );
     let err = refused(
         "iterations_with_leapfrog",
         &good().replace(

@@ -534,3 +534,44 @@ fn a_garment_scene_moves_a_panel_placed_through_its_object_unless_told_to_keep_i
     let (_d, r, _) = scene_json(&tube_scene(&keep), through);
     assert_eq!(r["panels_moved_out"], serde_json::json!([]));
 }
+
+#[test]
+fn a_garment_scene_takes_the_garments_bending_hessian_unless_its_solver_names_one() {
+    use drapekit::cloth::integrate::direct::BendingHessian;
+    use drapekit::garment::drape::GARMENT_BENDING_HESSIAN;
+    let dir = tube_folder();
+    let hessian = |extra: &str| {
+        let scene = dir.path().join("scene.toml");
+        std::fs::write(&scene, tube_scene("") + extra).unwrap();
+        let s = drapekit::scene::read(&scene).unwrap();
+        s.garment.unwrap().settings.solver.bending_hessian
+    };
+    assert_eq!(hessian(""), GARMENT_BENDING_HESSIAN);
+    for h in [BendingHessian::Exact, BendingHessian::Lumped] {
+        assert_eq!(
+            hessian(&format!("[solver]\nbending_hessian = \"{h}\"\n")),
+            h
+        );
+    }
+    // A flat piece's scene keeps the linearised step unless asked.
+    let text = std::fs::read_to_string(common::fixture("scenes/hanging_ribbon.toml")).unwrap();
+    let s = drapekit::scene::parse(&text, &common::fixture("scenes/hanging_ribbon.toml")).unwrap();
+    assert_eq!(s.solver.bending_hessian, BendingHessian::Exact);
+}
+
+#[test]
+fn a_garment_scene_without_an_integrator_takes_implicit_eulers_keys_and_refuses_projective_ones() {
+    let dir = tube_folder();
+    let scene = dir.path().join("scene.toml");
+    std::fs::write(&scene, tube_scene("") + "[solver]\nnewton_iterations = 2\n").unwrap();
+    let s = drapekit::scene::read(&scene).unwrap();
+    assert_eq!(s.garment.unwrap().settings.solver.newton_iterations, 2);
+    std::fs::write(&scene, tube_scene("") + "[solver]\nchebyshev = 0.9\n").unwrap();
+    let e = drapekit::scene::read(&scene).unwrap_err().to_string();
+    assert!(
+        e.contains(
+            "applies to integrator = \"projective-dynamics\" only (this scene uses implicit-euler)"
+        ),
+        "{e}"
+    );
+}

@@ -67,6 +67,10 @@ pub struct GarmentBench {
     /// comma-separated (`off,0.02`): each garment with each.
     #[arg(long, default_value = "off", value_delimiter = ',', num_args = 1..)]
     pub sew_spacing: Vec<String>,
+    /// Implicit Euler's bending Hessian, as `garment --bending-hessian`; several,
+    /// comma-separated (`exact,lumped`): each garment with each, one after the other.
+    #[arg(long, default_values_t = [gd::GARMENT_BENDING_HESSIAN], value_delimiter = ',', num_args = 1..)]
+    pub bending_hessian: Vec<crate::cloth::integrate::direct::BendingHessian>,
 }
 
 /// The issue's runs: (pattern, body).
@@ -114,6 +118,8 @@ pub struct GarmentRow {
     pub integrator: Integrator,
     /// The spacing the garment was sewn at when coarser than `spacing` (`--sew-spacing`), m.
     pub sew_spacing: Option<f64>,
+    /// Implicit Euler's bending Hessian (`--bending-hessian`).
+    pub bending_hessian: crate::cloth::integrate::direct::BendingHessian,
     /// The verdict's measures of the whole garment.
     pub body_crossing_edges: usize,
     pub self_crossing_edges: usize,
@@ -167,8 +173,12 @@ pub fn run(a: GarmentBench) -> anyhow::Result<()> {
             let at = rows.len();
             for seed in (0..a.seeds).map(|k| (k > 0).then_some(k)) {
                 settings.perturb = seed;
-                for &sew in &sew_spacings {
+                for (&sew, &hessian) in sew_spacings
+                    .iter()
+                    .flat_map(|s| a.bending_hessian.iter().map(move |h| (s, h)))
+                {
                     settings.sew_spacing = sew;
+                    settings.solver.bending_hessian = hessian;
                     let row = run_one(&pattern, &body, (p, b), &settings)?;
                     if !a.json {
                         print_row(&row, spacings.len() > 1);
@@ -227,6 +237,7 @@ fn run_one(
         rim_bending: settings.assemble.rim_bending,
         integrator: settings.solver.integrator,
         sew_spacing: (settings.sew_spacing).filter(|&s| s > settings.assemble.spacing),
+        bending_hessian: settings.solver.bending_hessian,
         body_crossing_edges: j.whole.body_crossing_edges,
         self_crossing_edges: j.whole.self_crossing_edges,
         max_strain: j.whole.max_strain,
@@ -360,7 +371,12 @@ fn print_row(r: &GarmentRow, spacing: bool) {
         }
         + &r.sew_spacing
             .map(|s| format!(" (sewn at {} cm)", crate::math::short(s * 100.0)))
-            .unwrap_or_default();
+            .unwrap_or_default()
+        + &if r.bending_hessian == gd::GARMENT_BENDING_HESSIAN {
+            String::new()
+        } else {
+            format!(" ({} bending Hessian)", r.bending_hessian)
+        };
     println!(
         "{} on {}{label}: {} particles; sewing {:.2} s ({:.1} s wall, gap {:.1} mm); drape \
          {:.2} s ({:.1} s wall, {}); {:.1} s wall in all; {}",

@@ -75,6 +75,12 @@ pub struct GarmentArgs {
     /// need steps far below 10 ms.
     #[arg(long, default_value_t = crate::garment::drape::GARMENT_INTEGRATOR)]
     pub integrator: crate::cloth::integrate::Integrator,
+    /// Implicit Euler's bending Hessian: lumped (default: the bending pairs no spring joins
+    /// moved onto the diagonal; the same forces and states at rest, a factor half the size)
+    /// or exact (the linearised backward Euler step; the README's `bench garment` measures
+    /// both)
+    #[arg(long, default_value_t = crate::garment::drape::GARMENT_BENDING_HESSIAN, value_name = "lumped|exact")]
+    pub bending_hessian: crate::cloth::integrate::direct::BendingHessian,
     /// Also write each panel alone, as `OUT_DIR/panels/<panel>.obj`.
     #[arg(long)]
     pub panels: bool,
@@ -168,6 +174,8 @@ pub struct GarmentReport {
     pub spacing: f64,
     /// The integrator (`--integrator`).
     pub integrator: crate::cloth::integrate::Integrator,
+    /// Implicit Euler's bending Hessian (`--bending-hessian`).
+    pub bending_hessian: crate::cloth::integrate::direct::BendingHessian,
     /// Whether the body is closed (inside tests, and moving seams out of it, need it).
     pub body_closed: bool,
     /// Each closed ring of the pattern against the body's girth where it sits, checked before
@@ -417,6 +425,7 @@ pub(super) fn settings(args: &GarmentArgs) -> anyhow::Result<GarmentSettings> {
     })?;
     let mut s = GarmentSettings::default();
     s.solver.integrator = args.integrator;
+    s.solver.bending_hessian = args.bending_hessian;
     s.assemble.spacing = args.spacing;
     s.assemble.fabric = fabric;
     s.friction = args.friction;
@@ -780,6 +789,7 @@ pub fn run(args: GarmentArgs) -> anyhow::Result<()> {
         fabric: args.fabric.clone(),
         spacing: args.spacing,
         integrator: args.integrator,
+        bending_hessian: args.bending_hessian,
         body_closed: c.closed,
         fit_check: fit,
         outcome,
@@ -855,8 +865,18 @@ fn too_short(r: &Ring) -> String {
 
 fn print_summary(r: &GarmentReport) {
     println!(
-        "{}: {} particles, {} seam springs, {} on {}, {}",
-        r.pattern, r.outcome.particles, r.outcome.seam_springs, r.fabric, r.body, r.integrator
+        "{}: {} particles, {} seam springs, {} on {}, {}{}",
+        r.pattern,
+        r.outcome.particles,
+        r.outcome.seam_springs,
+        r.fabric,
+        r.body,
+        r.integrator,
+        if r.integrator == crate::cloth::integrate::Integrator::ImplicitEuler {
+            format!(" ({} bending Hessian)", r.bending_hessian)
+        } else {
+            String::new()
+        }
     );
     for a in &r.assumed {
         println!("  assumed: {a}");
@@ -923,6 +943,9 @@ pub(super) fn print_outcome(r: &GarmentOutcome, wall_seconds: f64) {
         r.sew.seam_gap_max * 1e3,
         r.sew.sew_weight
     );
+    if let Some(t) = r.sew.exact_from {
+        println!("    sewing slowed at {t:.2} s: went on with the exact bending Hessian");
+    }
     if let Some(h) = &r.held_waist {
         let body = h.girth.map_or(String::new(), |c| {
             format!(", the body's natural waist, {:.1} cm round", c * 100.0)

@@ -4,6 +4,14 @@
 //! particle its diagonal block), so the symbolic analysis (ordering, elimination tree) is done
 //! once and each step only refactors the numbers.
 //!
+//! With [`BendingHessian::Lumped`] a bending element's pair `(a, b)` whose particles no spring
+//! joins (two apart along a thread) has no block of its own: its `w I` (`w = c w_a w_b`) is
+//! moved onto the two diagonal blocks as `|w| I` each. The difference from the exact matrix is
+//! `|w| (e_a - s e_b)(e_a - s e_b)^T` (`s` the sign of `w`), positive semidefinite, so the
+//! matrix stays positive definite and is at least the exact one: the step is a damped Newton
+//! step on the same forces, with the same fixed points (states at rest), and the factor has no
+//! fill from those pairs (about half the values on a garment).
+//!
 //! Pinned particles are not unknowns. A particle held on a face gets a stiff penalty
 //! `kappa n n^T` on its diagonal block (`kappa` = [`PENALTY`] times the block's scale), which
 //! keeps its normal motion within `1e-8` of zero relative to the tangential one: the direct
@@ -17,9 +25,72 @@ use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, SymbolicCholes
 use faer::sparse::{Argsort, Pair, SparseColMat, SymbolicSparseColMat};
 use faer::{Conj, Mat, Side};
 use nalgebra::Matrix3;
+use serde::Serialize;
 
 /// The contact penalty relative to the diagonal block's scale.
 pub const PENALTY: f64 = 1e8;
+
+/// How the direct solver takes the bending elements' Hessian (module docs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum BendingHessian {
+    /// Every pair of an element's particles has its block: the linearised backward Euler step.
+    #[default]
+    Exact,
+    /// The pairs no spring joins are moved onto their diagonal blocks (an upper bound).
+    Lumped,
+}
+
+impl std::str::FromStr for BendingHessian {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "exact" => Ok(BendingHessian::Exact),
+            "lumped" => Ok(BendingHessian::Lumped),
+            _ => Err(format!(
+                "unknown bending Hessian '{s}': expected 'exact' or 'lumped'"
+            )),
+        }
+    }
+}
+
+impl std::fmt::Display for BendingHessian {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            BendingHessian::Exact => "exact",
+            BendingHessian::Lumped => "lumped",
+        })
+    }
+}
+
+/// Every pair `(e, k, j)` of a bending element `e`'s nodes (`k > j`, indices into
+/// `bend_nodes`), element by element: the order of [`BlockSystem::visit`]'s bending blocks.
+fn bend_pairs(model: &ClothModel) -> impl Iterator<Item = (usize, usize, usize)> + '_ {
+    (0..model.bends()).flat_map(move |e| {
+        let (lo, hi) = (
+            model.bend_start[e] as usize,
+            model.bend_start[e + 1] as usize,
+        );
+        (lo..hi).flat_map(move |k| (lo..k).map(move |j| (e, k, j)))
+    })
+}
+
+/// Per bending pair of `model`, in the order [`BlockSystem::visit`] meets them, whether it is
+/// moved onto the diagonal (`Lumped`: no spring joins its particles). Empty for `Exact`.
+fn lumped_pairs(model: &ClothModel, hessian: BendingHessian) -> Vec<bool> {
+    if hessian == BendingHessian::Exact {
+        return Vec::new();
+    }
+    let joined: std::collections::HashSet<(u32, u32)> = (model.springs.iter())
+        .map(|s| (s.a.min(s.b), s.a.max(s.b)))
+        .collect();
+    bend_pairs(model)
+        .map(|(_, k, j)| {
+            let (a, b) = (model.bend_nodes[k], model.bend_nodes[j]);
+            !joined.contains(&(a.min(b), a.max(b)))
+        })
+        .collect()
+}
 
 /// Where a block of the pattern comes from.
 #[derive(Clone, Copy)]
@@ -37,6 +108,9 @@ pub struct BlockSystem {
     /// Which analysis this is (a number no other `BlockSystem` of the process has): tells a
     /// kept analysis from a new one.
     serial: u64,
+    hessian: BendingHessian,
+    /// Per bending pair, whether it is lumped ([`lumped_pairs`]).
+    lump: Vec<bool>,
     /// The blocks `(a, b)` of the pattern in visiting order: what a model must give to reuse
     /// this system (`fits`).
     blocks: Vec<(u32, u32)>,
@@ -80,11 +154,12 @@ fn block_values(a: usize, b: usize, m: &Matrix3<f64>, out: &mut Vec<f64>) {
 }
 
 impl BlockSystem {
-    /// The pattern of `model`'s implicit system.
-    pub fn new(model: &ClothModel) -> BlockSystem {
+    /// The pattern of `model`'s implicit system, its bending Hessian taken as `hessian`.
+    pub fn new(model: &ClothModel, hessian: BendingHessian) -> BlockSystem {
         let (index, particles) = model.free_unknowns();
         let mut pairs = Vec::new();
-        let blocks = Self::blocks(model, &index, &particles);
+        let lump = lumped_pairs(model, hessian);
+        let blocks = Self::blocks(model, &index, &particles, &lump);
         for &(a, b) in &blocks {
             block_pairs(a as usize, b as usize, &mut pairs);
         }
@@ -107,6 +182,8 @@ impl BlockSystem {
         static SERIAL: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
         BlockSystem {
             serial: SERIAL.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
+            hessian,
+            lump,
             blocks,
             factor: vec![0.0; llt_symbolic.len_val()],
             scratch,
@@ -121,9 +198,14 @@ impl BlockSystem {
     }
 
     /// The blocks of `model`'s pattern, in visiting order.
-    fn blocks(model: &ClothModel, index: &[u32], particles: &[u32]) -> Vec<(u32, u32)> {
+    fn blocks(
+        model: &ClothModel,
+        index: &[u32],
+        particles: &[u32],
+        lump: &[bool],
+    ) -> Vec<(u32, u32)> {
         let mut blocks = Vec::new();
-        Self::visit(model, index, particles, |a, b, _| {
+        Self::visit(model, index, particles, lump, |a, b, _| {
             blocks.push((a as u32, b as u32))
         });
         blocks
@@ -134,19 +216,24 @@ impl BlockSystem {
         self.serial
     }
 
-    /// Whether `model` has this system's pattern (the same particles joined and pinned; the
-    /// constants may differ): then this analysis serves its solver too.
-    pub fn fits(&self, model: &ClothModel) -> bool {
+    /// Whether `model` with `hessian` has this system's pattern (the same particles joined and
+    /// pinned; the constants may differ): then this analysis serves its solver too.
+    pub fn fits(&self, model: &ClothModel, hessian: BendingHessian) -> bool {
         let (index, particles) = model.free_unknowns();
-        index == self.index && Self::blocks(model, &index, &particles) == self.blocks
+        let lump = lumped_pairs(model, hessian);
+        hessian == self.hessian
+            && index == self.index
+            && Self::blocks(model, &index, &particles, &lump) == self.blocks
     }
 
     /// Calls `f(a, b, block)` (unknowns, `a >= b`) for every block of the pattern, in a fixed
-    /// order: diagonal blocks, then springs, then bending pairs.
+    /// order: diagonal blocks, then springs, then bending pairs (a lumped pair, `lump[p]`, as
+    /// two diagonal blocks).
     fn visit(
         model: &ClothModel,
         index: &[u32],
         particles: &[u32],
+        lump: &[bool],
         mut f: impl FnMut(usize, usize, Block),
     ) {
         for (u, &i) in particles.iter().enumerate() {
@@ -158,22 +245,20 @@ impl BlockSystem {
                 f(a.max(b) as usize, a.min(b) as usize, Block::Spring(k));
             }
         }
-        for e in 0..model.bends() {
-            let (lo, hi) = (
-                model.bend_start[e] as usize,
-                model.bend_start[e + 1] as usize,
+        for (pair, (e, k, j)) in bend_pairs(model).enumerate() {
+            let (a, b) = (
+                index[model.bend_nodes[k] as usize],
+                index[model.bend_nodes[j] as usize],
             );
-            for k in lo..hi {
-                for j in lo..k {
-                    let (a, b) = (
-                        index[model.bend_nodes[k] as usize],
-                        index[model.bend_nodes[j] as usize],
-                    );
-                    if a != u32::MAX && b != u32::MAX && a != b {
-                        let w = model.bend_c[e] * model.bend_weights[k] * model.bend_weights[j];
-                        f(a.max(b) as usize, a.min(b) as usize, Block::Bend(w));
-                    }
-                }
+            if a == u32::MAX || b == u32::MAX || a == b {
+                continue;
+            }
+            let w = model.bend_c[e] * model.bend_weights[k] * model.bend_weights[j];
+            if lump.get(pair).copied().unwrap_or(false) {
+                f(a as usize, a as usize, Block::Bend(w.abs()));
+                f(b as usize, b as usize, Block::Bend(w.abs()));
+            } else {
+                f(a.max(b) as usize, a.min(b) as usize, Block::Bend(w));
             }
         }
     }
@@ -192,14 +277,20 @@ impl BlockSystem {
     ) -> Result<(), NotPositiveDefinite> {
         let vals = &mut self.values;
         vals.clear();
-        Self::visit(model, &self.index, &self.particles, |a, b, block| {
-            let m = match block {
-                Block::Diagonal(i) => diag[i],
-                Block::Spring(s) => hess[s] * -h2,
-                Block::Bend(w) => Matrix3::identity() * (h2 * w),
-            };
-            block_values(a, b, &m, vals);
-        });
+        Self::visit(
+            model,
+            &self.index,
+            &self.particles,
+            &self.lump,
+            |a, b, block| {
+                let m = match block {
+                    Block::Diagonal(i) => diag[i],
+                    Block::Spring(s) => hess[s] * -h2,
+                    Block::Bend(w) => Matrix3::identity() * (h2 * w),
+                };
+                block_values(a, b, &m, vals);
+            },
+        );
         let particles = &self.particles;
         let mat = SparseColMat::new_from_argsort(self.symbolic.clone(), &self.argsort, vals)
             .expect("the pattern's values");
@@ -284,7 +375,7 @@ mod tests {
         use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
         for (half, supernodal) in [(0.03, false), (0.3, true)] {
             let (model, x) = sheet(half, 0.01, false);
-            let mut sys = BlockSystem::new(&model);
+            let mut sys = BlockSystem::new(&model, BendingHessian::Exact);
             let raw = sys.llt_symbolic.raw();
             assert_eq!(
                 matches!(raw, SymbolicCholeskyRaw::Supernodal(_)),
@@ -325,12 +416,12 @@ mod tests {
     #[test]
     fn an_analysis_fits_a_model_joined_and_pinned_alike_whatever_its_constants() {
         let model = square(false);
-        let sys = BlockSystem::new(&model);
-        assert!(sys.fits(&model));
+        let sys = BlockSystem::new(&model, BendingHessian::Exact);
+        assert!(sys.fits(&model, BendingHessian::Exact));
         // Other constants: the same pattern.
         let mut stiffer = model.clone();
         stiffer.springs.iter_mut().for_each(|s| s.k *= 10.0);
-        assert!(sys.fits(&stiffer));
+        assert!(sys.fits(&stiffer, BendingHessian::Exact));
         // One more spring, one spring joining other particles, a pinned corner: other patterns.
         let mut more = model.clone();
         let last = *more.springs.last().unwrap();
@@ -339,7 +430,92 @@ mod tests {
         let first = &mut moved.springs[0];
         first.b = if first.b == 5 { 6 } else { 5 };
         for other in [&more, &moved, &square(true)] {
-            assert!(!sys.fits(other));
+            assert!(!sys.fits(other, BendingHessian::Exact));
         }
+    }
+
+    /// `x^T A x` of the symmetric matrix whose lower triangle the system last assembled.
+    fn quadratic(sys: &BlockSystem, x: &[f64]) -> f64 {
+        let mat = SparseColMat::new_from_argsort(sys.symbolic.clone(), &sys.argsort, &sys.values)
+            .unwrap();
+        let (col_ptr, row_idx, val) = (
+            mat.symbolic().col_ptr(),
+            mat.symbolic().row_idx(),
+            mat.val(),
+        );
+        let mut q = 0.0;
+        for c in 0..x.len() {
+            for k in col_ptr[c]..col_ptr[c + 1] {
+                let r = row_idx[k];
+                q += if r == c { 1.0 } else { 2.0 } * val[k] * x[r] * x[c];
+            }
+        }
+        q
+    }
+
+    #[test]
+    fn lumped_bending_is_the_exact_matrix_plus_each_unjoined_pair_as_a_square_and_factors_smaller()
+    {
+        let (model, x) = sheet(0.05, 0.01, false);
+        let hess: Vec<Matrix3<f64>> = (model.springs.iter())
+            .map(|s| s.hessian(&x[s.a as usize], &x[s.b as usize], true))
+            .collect();
+        let h2 = 1e-4;
+        // The diagonal blocks of M + h^2 (springs + bending), as implicit Euler's.
+        let mut diag = vec![Matrix3::identity() * 1e-3; model.len()];
+        for (s, h) in model.springs.iter().zip(&hess) {
+            diag[s.a as usize] += h * h2;
+            diag[s.b as usize] += h * h2;
+        }
+        for e in 0..model.bends() {
+            for k in model.bend_start[e] as usize..model.bend_start[e + 1] as usize {
+                let w = model.bend_weights[k];
+                diag[model.bend_nodes[k] as usize] +=
+                    Matrix3::identity() * (h2 * model.bend_c[e] * w * w);
+            }
+        }
+        let rhs = vec![Vec3::new(0.0, 0.0, 1e-3); model.len()];
+        let mut delta = vec![Vec3::zeros(); model.len()];
+        let mut exact = BlockSystem::new(&model, BendingHessian::Exact);
+        let mut lumped = BlockSystem::new(&model, BendingHessian::Lumped);
+        for sys in [&mut exact, &mut lumped] {
+            sys.solve(&model, &diag, &hess, h2, &rhs, &mut delta)
+                .unwrap();
+        }
+        // Which pairs are lumped: those of no spring, each a pair two apart along a thread.
+        let lump = lumped_pairs(&model, BendingHessian::Lumped);
+        assert!(lump.iter().filter(|&&l| l).count() >= model.len());
+        assert!(lump.len() > lump.iter().filter(|&&l| l).count());
+        // Any x: x^T (A_lumped - A_exact) x = sum over lumped pairs of h^2 |w| |x_a - s x_b|^2.
+        let mut rng = crate::math::SplitMix(7);
+        for _ in 0..5 {
+            let v: Vec<f64> = (0..3 * model.len()).map(|_| rng.next_f64() - 0.5).collect();
+            let u = |n: u32| exact.index[n as usize] as usize;
+            let mut expected = 0.0;
+            for (pair, (e, k, j)) in bend_pairs(&model).enumerate() {
+                if lump[pair] {
+                    let w = model.bend_c[e] * model.bend_weights[k] * model.bend_weights[j];
+                    let (a, b) = (u(model.bend_nodes[k]), u(model.bend_nodes[j]));
+                    let d: f64 = (0..3)
+                        .map(|c| (v[3 * a + c] - w.signum() * v[3 * b + c]).powi(2))
+                        .sum();
+                    expected += h2 * w.abs() * d;
+                }
+            }
+            let got = quadratic(&lumped, &v) - quadratic(&exact, &v);
+            assert!(expected > 0.0);
+            assert!(
+                (got - expected).abs() <= 1e-9 * expected,
+                "{got} against {expected}"
+            );
+        }
+        // Fewer blocks, a smaller factor, and neither analysis serves the other.
+        let off = |sys: &BlockSystem| sys.blocks.iter().filter(|(a, b)| a != b).count();
+        assert!(off(&lumped) < off(&exact));
+        let (nl, ne) = (lumped.llt_symbolic.len_val(), exact.llt_symbolic.len_val());
+        assert!((nl as f64) < 0.9 * ne as f64, "{nl} against {ne}");
+        assert!(!exact.fits(&model, BendingHessian::Lumped));
+        assert!(!lumped.fits(&model, BendingHessian::Exact));
+        assert!(lumped.fits(&model, BendingHessian::Lumped));
     }
 }

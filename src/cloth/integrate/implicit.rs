@@ -91,8 +91,8 @@ impl ImplicitEuler {
             precond: vec![Matrix3::zeros(); n],
             direct: (settings.linear_solver == LinearSolver::Cholesky).then(|| {
                 (analysis.direct.take())
-                    .filter(|sys| sys.fits(model))
-                    .unwrap_or_else(|| BlockSystem::new(model))
+                    .filter(|sys| sys.fits(model, settings.bending_hessian))
+                    .unwrap_or_else(|| BlockSystem::new(model, settings.bending_hessian))
             }),
             filter: vec![Filter::Free; n],
             stuck: vec![false; n],

@@ -181,6 +181,9 @@ pub struct SolverSettings {
     /// Implicit Euler: how each Newton step's linear system is solved (default sparse
     /// Cholesky).
     pub linear_solver: LinearSolver,
+    /// Implicit Euler with sparse Cholesky: the bending pairs no spring joins in the factored
+    /// matrix, or moved onto its diagonal (`direct::BendingHessian`; default exact).
+    pub bending_hessian: direct::BendingHessian,
     /// Implicit Euler: conjugate gradients stop when the preconditioned residual has fallen by
     /// this factor (default 1e-6).
     pub cg_tolerance: f64,
@@ -235,6 +238,7 @@ impl SolverSettings {
             dt: integrator.default_dt(),
             newton_iterations: 1,
             linear_solver: LinearSolver::Cholesky,
+            bending_hessian: direct::BendingHessian::Exact,
             cg_tolerance: 1e-6,
             cg_max_iterations: 1000,
             iterations: 5,
