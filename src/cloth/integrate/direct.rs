@@ -219,11 +219,13 @@ impl BlockSystem {
     /// Whether `model` with `hessian` has this system's pattern (the same particles joined and
     /// pinned; the constants may differ): then this analysis serves its solver too.
     pub fn fits(&self, model: &ClothModel, hessian: BendingHessian) -> bool {
+        if hessian != self.hessian {
+            return false;
+        }
+        // This system's lumped pairs serve: blocks equal to its own mean the same springs and
+        // bending elements, hence the same pairs lumped (no set of springs rebuilt per check).
         let (index, particles) = model.free_unknowns();
-        let lump = lumped_pairs(model, hessian);
-        hessian == self.hessian
-            && index == self.index
-            && Self::blocks(model, &index, &particles, &lump) == self.blocks
+        index == self.index && Self::blocks(model, &index, &particles, &self.lump) == self.blocks
     }
 
     /// Calls `f(a, b, block)` (unknowns, `a >= b`) for every block of the pattern, in a fixed
