@@ -36,7 +36,7 @@ use std::ops::Range;
 use super::etree::{self, Split};
 
 /// The matrix is not positive definite (a pivot was not positive).
-#[derive(Debug, thiserror::Error)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
 #[error("the matrix is not positive definite")]
 pub struct NotPositiveDefinite;
 

@@ -24,7 +24,7 @@
 //! let mut c = Cholesky::analyse(2, &[(0, 0), (1, 0), (1, 1)]);
 //! c.factor(&[4.0, 2.0, 3.0]).unwrap();
 //! let mut up = DiagonalUpdate::default();
-//! up.set(&c, &[(1, 5.0)]);
+//! up.set(&c, &[(1, 5.0)]).unwrap();
 //! // b = A' [1, -1]: [2, -6] in every column.
 //! let mut b = [[2.0, 2.0, 2.0], [-6.0, -6.0, -6.0]];
 //! c.solve_with(&mut b, |y| up.correct(y));
@@ -32,6 +32,7 @@
 //! ```
 
 use super::cholesky::{Cholesky, Row};
+use super::NotPositiveDefinite;
 use nalgebra::DMatrix;
 
 /// The changed diagonal entries of a factored matrix and what the correction needs.
@@ -84,8 +85,13 @@ impl DiagonalUpdate {
 
     /// Sets the changes to `changes` (`(unknown, delta)`, distinct unknowns, deltas non-zero,
     /// and `A + U W U^T` positive definite). Columns of unknowns already changed, and their
-    /// products, are kept.
-    pub fn set(&mut self, chol: &Cholesky, changes: &[(usize, f64)]) {
+    /// products, are kept. An `A + U W U^T` that is singular (its `C` is) leaves no change set
+    /// and is an error: the caller refactors instead.
+    pub fn set(
+        &mut self,
+        chol: &Cholesky,
+        changes: &[(usize, f64)],
+    ) -> Result<(), NotPositiveDefinite> {
         self.scratch.resize(chol.len(), 0.0);
         let mut old: Vec<(usize, usize)> = self.index.iter().copied().zip(0..).collect();
         old.sort_unstable();
@@ -108,7 +114,7 @@ impl DiagonalUpdate {
         self.index = changes.iter().map(|&(u, _)| u).collect();
         self.delta = changes.iter().map(|&(_, d)| d).collect();
         self.build_gram(&from);
-        self.build_c();
+        self.build_c()
     }
 
     /// The changes and the products `V^T V` (`saved`; the columns follow from the factor).
@@ -122,11 +128,21 @@ impl DiagonalUpdate {
 
     /// The correction `saved` from [`DiagonalUpdate::saved`] on the same factor `chol`: its
     /// columns recomputed, its products as they were (so the solves have the same bits).
-    /// `columns_solved` is left to the caller.
-    pub fn restore(&mut self, chol: &Cholesky, saved: &super::saved::UpdateKept) {
+    /// `columns_solved` is left to the caller. Saved products that do not fit together (sizes,
+    /// an unknown beyond the factor, a singular `C`) leave no change set and are an error.
+    pub fn restore(
+        &mut self,
+        chol: &Cholesky,
+        saved: &super::saved::UpdateKept,
+    ) -> Result<(), NotPositiveDefinite> {
         let k = saved.index.len();
-        assert!(saved.delta.len() == k && saved.gram.len() == k * k);
         self.clear();
+        if saved.delta.len() != k
+            || saved.gram.len() != k * k
+            || saved.index.iter().any(|&u| u as usize >= chol.len())
+        {
+            return Err(NotPositiveDefinite);
+        }
         self.scratch.resize(chol.len(), 0.0);
         for &u in &saved.index {
             let col = chol.forward_unit(u as usize, &mut self.scratch);
@@ -135,7 +151,7 @@ impl DiagonalUpdate {
         self.index = saved.index.iter().map(|&u| u as usize).collect();
         self.delta.clone_from(&saved.delta);
         self.gram = DMatrix::from_column_slice(k, k, &saved.gram);
-        self.build_c();
+        self.build_c()
     }
 
     /// `V^T V`: products of two kept columns are copied (`from`: each slot's old slot).
@@ -169,15 +185,23 @@ impl DiagonalUpdate {
         self.gram = gram;
     }
 
-    /// `C^-1` from the products and the deltas.
-    fn build_c(&mut self) {
+    /// `C^-1` from the products and the deltas; a singular `C` (the updated matrix is
+    /// singular) clears every change.
+    fn build_c(&mut self) -> Result<(), NotPositiveDefinite> {
         let mut c = self.gram.clone();
         for (j, d) in self.delta.iter().enumerate() {
             c[(j, j)] += 1.0 / d;
         }
-        self.c_inv = c
-            .try_inverse()
-            .expect("C is invertible when the updated matrix is positive definite");
+        match c.try_inverse() {
+            Some(inv) if inv.iter().all(|v| v.is_finite()) => {
+                self.c_inv = inv;
+                Ok(())
+            }
+            _ => {
+                self.clear();
+                Err(NotPositiveDefinite)
+            }
+        }
     }
 
     /// Turns `y = L^-1 P b` into `(I - V C^-1 V^T) y` (the rows of a solve between its sweeps:
@@ -242,7 +266,7 @@ mod tests {
         let b: Vec<[f64; 3]> = (0..n)
             .map(|i| [(i as f64).sin(), 1.0, (i % 7) as f64 - 3.0])
             .collect();
-        up.set(&chol, changes);
+        up.set(&chol, changes).unwrap();
         let mut x = b.clone();
         chol.solve_with(&mut x, |y| up.correct(y));
         let mut v2 = v.clone();
@@ -287,5 +311,35 @@ mod tests {
             .collect();
         let mut up = DiagonalUpdate::default();
         assert!(both(90, &many, &mut up) < 1e-12);
+    }
+
+    #[test]
+    fn an_update_that_makes_the_matrix_singular_is_refused_and_leaves_no_change() {
+        // A = 4 I (2 x 2): V = e_0 / 2, V^T V = 1/4; a change of -4 gives C = -1/4 + 1/4 = 0
+        // exactly, and A' = diag(0, 4).
+        let mut chol = Cholesky::analyse(2, &[(0, 0), (1, 1)]);
+        chol.factor(&[4.0, 4.0]).unwrap();
+        let mut up = DiagonalUpdate::default();
+        up.set(&chol, &[(1, 5.0)]).unwrap();
+        assert_eq!(up.len(), 1);
+        assert_eq!(up.set(&chol, &[(0, -4.0)]), Err(NotPositiveDefinite));
+        assert!(
+            up.is_empty(),
+            "a refused update leaves the factored matrix as it is"
+        );
+        // Saved products that do not fit the factor are refused the same way.
+        let bad = crate::cloth::integrate::saved::UpdateKept {
+            index: vec![7],
+            delta: vec![1.0],
+            gram: vec![0.25],
+        };
+        assert_eq!(up.restore(&chol, &bad), Err(NotPositiveDefinite));
+        let singular = crate::cloth::integrate::saved::UpdateKept {
+            index: vec![0],
+            delta: vec![-4.0],
+            gram: vec![0.25],
+        };
+        assert_eq!(up.restore(&chol, &singular), Err(NotPositiveDefinite));
+        assert!(up.is_empty());
     }
 }

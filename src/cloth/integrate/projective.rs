@@ -261,7 +261,7 @@ impl ProjectiveDynamics {
     /// Brings the solves to this step's contact weights: an exact low-rank correction while at
     /// most `low_rank_max` particles differ from the factored matrix, else a refactorisation.
     fn refresh_matrix(&mut self) {
-        let Some(chol) = &mut self.chol else { return };
+        let Some(chol) = &self.chol else { return };
         let (weight, factored) = (&self.weight, &self.factored);
         let changes: Vec<(usize, f64)> = (self.particle.iter().enumerate())
             .filter_map(|(u, &i)| {
@@ -273,10 +273,12 @@ impl ProjectiveDynamics {
             return;
         }
         let t = std::time::Instant::now();
-        if changes.len() > self.settings.low_rank_max as usize {
+        // A change that leaves the matrix singular (which the weights, all >= 0, never make)
+        // is refactored too: the factorisation then says so.
+        let low_rank = changes.len() <= self.settings.low_rank_max as usize
+            && self.update.set(chol, &changes).is_ok();
+        if !low_rank {
             self.factor();
-        } else {
-            self.update.set(chol, &changes);
         }
         self.stats.factor_seconds += t.elapsed().as_secs_f64();
     }
@@ -760,8 +762,10 @@ impl Solver for ProjectiveDynamics {
         // correction on top of it.
         self.weight.clone_from(&k.factored);
         self.factor();
+        // Products that do not fit the factor (a crafted checkpoint: its checksum holds) are
+        // dropped; the next step's weights are then corrected from the factored matrix anew.
         if let Some(chol) = &self.chol {
-            self.update.restore(chol, &k.update);
+            let _ = self.update.restore(chol, &k.update);
         }
         self.stats = state.stats;
         self.update.columns_solved = state.stats.low_rank_columns;
