@@ -119,7 +119,7 @@
 //! not separate a deep stack at once: `SelfStats::remaining` says what is left for the next step.
 
 use crate::collide::Collider;
-use crate::math::{Aabb, Point3, Vec3};
+use crate::math::{uf_root, Aabb, Point3, Vec3};
 use crate::par;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -364,31 +364,23 @@ pub struct ClothHash {
     work: Work,
 }
 
-#[inline]
-fn find(weld: &mut [u32], mut i: u32) -> u32 {
-    while weld[i as usize] != i {
-        let up = weld[weld[i as usize] as usize];
-        weld[i as usize] = up;
-        i = up;
-    }
-    i
-}
-
 impl ClothHash {
     /// The topology of a cloth of `particles` particles and `triangles`, the two sides of each
     /// seam in `seams` welded. No cubes yet: see [`ClothHash::rebuild`].
     pub fn new(particles: usize, triangles: &[[u32; 3]], seams: &[[u32; 2]]) -> ClothHash {
-        let mut weld: Vec<u32> = (0..particles as u32).collect();
+        let mut parent: Vec<usize> = (0..particles).collect();
         for &[a, b] in seams {
-            let (ra, rb) = (find(&mut weld, a), find(&mut weld, b));
+            let (ra, rb) = (
+                uf_root(&mut parent, a as usize),
+                uf_root(&mut parent, b as usize),
+            );
             if ra != rb {
-                weld[ra.max(rb) as usize] = ra.min(rb);
+                parent[ra.max(rb)] = ra.min(rb);
             }
         }
-        for i in 0..particles as u32 {
-            let r = find(&mut weld, i);
-            weld[i as usize] = r;
-        }
+        let weld: Vec<u32> = (0..particles)
+            .map(|i| uf_root(&mut parent, i) as u32)
+            .collect();
         let tri_weld: Vec<[u32; 3]> = triangles
             .iter()
             .map(|t| t.map(|v| weld[v as usize]))
