@@ -11,13 +11,16 @@
 //! point outside every coarse triangle (a fine sample of a curved edge, outside the coarse
 //! outline's chord by at most its sagitta) takes the nearest point of the nearest triangle.
 //!
-//! The holding triangle is found through a grid of square cells over the panel (edge: the
-//! mean side of the triangles' boxes), each cell listing, in index order, the triangles whose
-//! box meets it: a point reads its own cell, and the first listed triangle that holds it is
-//! the lowest-numbered one that does, as a scan of all of them would find.
+//! The holding triangle is found through the body collision's uniform grid (`collide::Grid`)
+//! over the panel's flat pattern, its cells about as wide as the triangles' boxes, each
+//! listing in index order the triangles whose box meets it: a point reads its own cell, and
+//! the first listed triangle that holds it is the lowest-numbered one that does, as a scan of
+//! all of them would find.
 
 use crate::cloth::model::ClothModel;
-use crate::math::{Point2, Point3};
+use crate::collide::grid::Grid;
+use crate::math::{Point2, Point3, Vec3};
+use crate::mesh::TriMesh;
 use rayon::prelude::*;
 
 /// How far outside a triangle, in barycentric terms, a point still counts as inside it
@@ -57,7 +60,7 @@ pub fn transfer(from: &ClothModel, from_x: &[Point3], to: &ClothModel) -> Vec<Po
     let mut out = vec![Point3::origin(); to.len()];
     for (fp, tp) in from.pieces.iter().zip(&to.pieces) {
         let tris = &from.triangles[fp.first_triangle..fp.first_triangle + fp.triangles];
-        let grid = TriGrid::new(&from.rest, tris);
+        let grid = panel_grid(&from.rest, fp.first, fp.count, tris);
         let range = tp.first..tp.first + tp.count;
         out[range.clone()]
             .par_iter_mut()
@@ -71,108 +74,49 @@ pub fn transfer(from: &ClothModel, from_x: &[Point3], to: &ClothModel) -> Vec<Po
     out
 }
 
-/// The triangles of a panel listed per cell of a square grid over their boxes (module docs).
-struct TriGrid {
-    lo: Point2,
-    cell: f64,
-    nx: usize,
-    ny: usize,
-    /// Cell `c`'s triangles are `items[start[c]..start[c + 1]]`, in index order.
-    start: Vec<u32>,
-    items: Vec<u32>,
+/// Cells a panel's grid may have per triangle (a few sliver triangles cannot make it huge).
+const CELLS_PER_TRIANGLE: f64 = 4.0;
+
+/// The panel's triangles `tris` (indices into `flat`, the panel's particles from `first`)
+/// listed per cell of a `collide::Grid` over its flat pattern (at z = 0), the cells about as
+/// wide as the triangles' boxes: face `t` of the grid is `tris[t]`.
+fn panel_grid(flat: &[Point2], first: usize, count: usize, tris: &[[u32; 3]]) -> Grid {
+    let positions: Vec<Point3> = (flat[first..first + count].iter())
+        .map(|p| Point3::new(p.x, p.y, 0.0))
+        .collect();
+    let local = tris.iter().map(|t| t.map(|v| v - first as u32)).collect();
+    let mesh = TriMesh::new(positions, local);
+    let size = mesh.bbox().map_or(Vec3::zeros(), |b| b.size());
+    let n = tris.len().max(1) as f64;
+    let mean_side = (0..mesh.faces.len())
+        .map(|f| {
+            let c = mesh.corners(f);
+            let span =
+                |a: usize| c[0][a].max(c[1][a]).max(c[2][a]) - c[0][a].min(c[1][a]).min(c[2][a]);
+            (span(0) + span(1)) / 2.0
+        })
+        .sum::<f64>()
+        / n;
+    let cap = CELLS_PER_TRIANGLE * n;
+    let cell = (mean_side.max((size.x * size.y / cap).sqrt()))
+        .max((size.x + size.y) / cap)
+        .max(f64::MIN_POSITIVE);
+    let along = |w: f64| ((w / cell).ceil() as usize).max(1);
+    Grid::build(&mesh, [along(size.x), along(size.y), 1], 0.0)
 }
 
-/// Cells a grid may have per triangle (a few sliver triangles cannot make it huge).
-const CELLS_PER_TRIANGLE: usize = 4;
-
-impl TriGrid {
-    fn new(flat: &[Point2], tris: &[[u32; 3]]) -> TriGrid {
-        let boxes: Vec<(Point2, Point2)> = (tris.iter())
-            .map(|t| {
-                let c = t.map(|v| flat[v as usize]);
-                let lo = Point2::new(
-                    c[0].x.min(c[1].x).min(c[2].x),
-                    c[0].y.min(c[1].y).min(c[2].y),
-                );
-                let hi = Point2::new(
-                    c[0].x.max(c[1].x).max(c[2].x),
-                    c[0].y.max(c[1].y).max(c[2].y),
-                );
-                (lo, hi)
-            })
-            .collect();
-        let mut lo = Point2::new(f64::INFINITY, f64::INFINITY);
-        let mut hi = Point2::new(f64::NEG_INFINITY, f64::NEG_INFINITY);
-        let mut side = 0.0;
-        for (a, b) in &boxes {
-            lo = Point2::new(lo.x.min(a.x), lo.y.min(a.y));
-            hi = Point2::new(hi.x.max(b.x), hi.y.max(b.y));
-            side += (b.x - a.x) + (b.y - a.y);
-        }
-        let n = boxes.len().max(1);
-        let (w, h) = ((hi.x - lo.x).max(0.0), (hi.y - lo.y).max(0.0));
-        let mut cell = (side / (2 * n) as f64).max(f64::MIN_POSITIVE);
-        // No more than CELLS_PER_TRIANGLE cells per triangle.
-        let cap = (CELLS_PER_TRIANGLE * n) as f64;
-        if (w / cell + 1.0) * (h / cell + 1.0) > cap {
-            cell = ((w * h / cap).sqrt()).max((w + h) / cap).max(cell);
-        }
-        let nx = ((w / cell) as usize + 1).min(CELLS_PER_TRIANGLE * n);
-        let ny = ((h / cell) as usize + 1).min(CELLS_PER_TRIANGLE * n);
-        let mut grid = TriGrid {
-            lo: if boxes.is_empty() {
-                Point2::origin()
-            } else {
-                lo
-            },
-            cell,
-            nx,
-            ny,
-            start: vec![0; nx * ny + 1],
-            items: Vec::new(),
-        };
-        let ranges: Vec<_> = (boxes.iter())
-            .map(|(a, b)| (grid.index(a), grid.index(b)))
-            .collect();
-        let cells = |&(a, b): &((usize, usize), (usize, usize))| {
-            (a.1..=b.1).flat_map(move |j| (a.0..=b.0).map(move |i| j * nx + i))
-        };
-        for r in &ranges {
-            cells(r).for_each(|c| grid.start[c + 1] += 1);
-        }
-        for c in 0..nx * ny {
-            grid.start[c + 1] += grid.start[c];
-        }
-        let mut fill = grid.start.clone();
-        grid.items = vec![0; grid.start[nx * ny] as usize];
-        for (t, r) in ranges.iter().enumerate() {
-            for c in cells(r) {
-                grid.items[fill[c] as usize] = t as u32;
-                fill[c] += 1;
-            }
-        }
-        grid
-    }
-
-    /// The cell `(i, j)` of `p`, clamped to the grid.
-    fn index(&self, p: &Point2) -> (usize, usize) {
-        let f = |v: f64, n: usize| (((v / self.cell).floor().max(0.0)) as usize).min(n - 1);
-        (f(p.x - self.lo.x, self.nx), f(p.y - self.lo.y, self.ny))
-    }
-
-    /// The triangles listed in `q`'s cell (`q` outside the grid: the nearest cell's).
-    fn near(&self, q: &Point2) -> &[u32] {
-        let (i, j) = self.index(q);
-        let c = j * self.nx + i;
-        &self.items[self.start[c] as usize..self.start[c + 1] as usize]
-    }
+/// The triangles listed in `q`'s cell of `grid` (`q` outside it: the nearest cell's).
+fn near<'g>(grid: &'g Grid, q: &Point2) -> &'g [u32] {
+    let [i, j, k] = grid.clamp_cell(&Point3::new(q.x, q.y, 0.0));
+    grid.cell_faces(grid.linear(i, j, k))
 }
 
-/// The triangle of `tris` (indices into `flat`; `grid` built on them) that holds `q`, or the
-/// nearest, and the barycentric coordinates of `q` (or of its nearest point) in it.
-fn locate(flat: &[Point2], tris: &[[u32; 3]], grid: &TriGrid, q: &Point2) -> (usize, [f64; 3]) {
+/// The triangle of `tris` (indices into `flat`; `grid` from [`panel_grid`] on them) that
+/// holds `q`, or the nearest, and the barycentric coordinates of `q` (or of its nearest point)
+/// in it.
+fn locate(flat: &[Point2], tris: &[[u32; 3]], grid: &Grid, q: &Point2) -> (usize, [f64; 3]) {
     let corners = |t: &[u32; 3]| t.map(|v| flat[v as usize]);
-    for &n in grid.near(q) {
+    for &n in near(grid, q) {
         let c = corners(&tris[n as usize]);
         let lo = |a: usize| c[0][a].min(c[1][a]).min(c[2][a]);
         let hi = |a: usize| c[0][a].max(c[1][a]).max(c[2][a]);
@@ -224,7 +168,7 @@ mod tests {
     fn a_point_inside_gets_its_barycentric_coordinates_and_one_outside_the_nearest_edge() {
         let flat = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)].map(|(x, y)| Point2::new(x, y));
         let tris = [[0, 1, 2], [1, 3, 2]];
-        let grid = TriGrid::new(&flat, &tris);
+        let grid = panel_grid(&flat, 0, flat.len(), &tris);
         let locate = |q: &Point2| locate(&flat, &tris, &grid, q);
         let (t, b) = locate(&Point2::new(0.2, 0.3));
         assert_eq!(t, 0);
@@ -255,8 +199,8 @@ mod tests {
         let fabric = crate::cloth::Fabric::cotton();
         let p = crate::cloth::pattern::build(&ring, 0.02, &fabric, &Default::default()).unwrap();
         let tris = p.triangles.clone();
-        let grid = TriGrid::new(&p.flat, &tris);
-        assert!(grid.nx * grid.ny > 100, "{} x {} cells", grid.nx, grid.ny);
+        let grid = panel_grid(&p.flat, 0, p.flat.len(), &tris);
+        assert!(grid.dims[0] * grid.dims[1] > 100, "{:?} cells", grid.dims);
         let scan = |q: &Point2| {
             tris.iter().enumerate().find_map(|(n, t)| {
                 let b = barycentric(&t.map(|v| p.flat[v as usize]), q)?;
