@@ -71,6 +71,9 @@ pub struct GarmentBench {
     /// comma-separated (`exact,lumped`): each garment with each, one after the other.
     #[arg(long, default_values_t = [gd::GARMENT_BENDING_HESSIAN], value_delimiter = ',', num_args = 1..)]
     pub bending_hessian: Vec<crate::cloth::integrate::direct::BendingHessian>,
+    /// The drape's seam ramp, as `garment --seam-ramp` (a factor a check, or `off`).
+    #[arg(long, default_value = "off", value_name = "F|off")]
+    pub seam_ramp: String,
 }
 
 /// The runs: (pattern, body).
@@ -120,6 +123,8 @@ pub struct GarmentRow {
     pub sew_spacing: Option<f64>,
     /// Implicit Euler's bending Hessian (`--bending-hessian`).
     pub bending_hessian: crate::cloth::integrate::direct::BendingHessian,
+    /// The drape's seam ramp (`--seam-ramp`), or `null`: off.
+    pub seam_ramp: Option<f64>,
     /// The verdict's measures of the whole garment.
     pub body_crossing_edges: usize,
     pub self_crossing_edges: usize,
@@ -147,15 +152,19 @@ pub fn run(a: GarmentBench) -> anyhow::Result<()> {
     settings.hold_waist = super::garment::hold_waist(&a.hold_waist)?;
     settings.assemble.rim_bending = !a.no_rim_bending;
     settings.solver.integrator = a.integrator;
+    settings.seam_ramp = super::garment::seam_ramp(&a.seam_ramp)?;
     let sew_spacings = (a.sew_spacing.iter())
         .map(|v| super::garment::sew_spacing(v))
         .collect::<anyhow::Result<Vec<_>>>()?;
     if let Some(p) = settings
         .problems()
         .into_iter()
-        .find(|p| p.field == "integrator")
+        .find(|p| p.field == "integrator" || p.field == "seam_ramp")
     {
-        anyhow::bail!("--integrator {}", p.message);
+        match p.field {
+            "seam_ramp" => anyhow::bail!("--seam-ramp {}: {}", a.seam_ramp, p.message),
+            _ => anyhow::bail!("--integrator {}", p.message),
+        }
     }
     let keep = |p: &str, b: &str| {
         a.only
@@ -238,6 +247,7 @@ fn run_one(
         integrator: settings.solver.integrator,
         sew_spacing: (settings.sew_spacing).filter(|&s| s > settings.assemble.spacing),
         bending_hessian: settings.solver.bending_hessian,
+        seam_ramp: settings.seam_ramp,
         body_crossing_edges: j.whole.body_crossing_edges,
         self_crossing_edges: j.whole.self_crossing_edges,
         max_strain: j.whole.max_strain,

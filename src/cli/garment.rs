@@ -109,6 +109,11 @@ pub struct GarmentArgs {
     /// garment` measures both)
     #[arg(long, default_value = "off", value_name = "M|off")]
     pub sew_spacing: String,
+    /// The drape's seams stiffen from the sewing's pull to their full constant by this factor
+    /// every 0.02 s (2 is the one measured), or `off`: at once (the README's `garment
+    /// --seam-ramp` says what each does)
+    #[arg(long, default_value = "off", value_name = "F|off")]
+    pub seam_ramp: String,
 }
 
 /// The edges of `pattern` labelled as a waist (`garment::waist::WAIST_LABEL`).
@@ -132,15 +137,25 @@ pub(super) fn hold_waist(value: &str) -> anyhow::Result<crate::garment::drape::W
     }
 }
 
-/// `--sew-spacing`'s value.
-pub(super) fn sew_spacing(value: &str) -> anyhow::Result<Option<f64>> {
+/// `off` as `None`, or a number, for `flag` (`expected`: what else it takes).
+fn off_or_number(flag: &str, value: &str, expected: &str) -> anyhow::Result<Option<f64>> {
     match value {
         "off" => Ok(None),
         v => match v.parse::<f64>() {
-            Ok(s) => Ok(Some(s)),
-            _ => bail!("--sew-spacing {v}: expected off or a spacing in metres"),
+            Ok(x) => Ok(Some(x)),
+            _ => bail!("{flag} {v}: expected off or {expected}"),
         },
     }
+}
+
+/// `--sew-spacing`'s value.
+pub(super) fn sew_spacing(value: &str) -> anyhow::Result<Option<f64>> {
+    off_or_number("--sew-spacing", value, "a spacing in metres")
+}
+
+/// `--seam-ramp`'s value (checked with the other settings: `GarmentSettings::problems`).
+pub(super) fn seam_ramp(value: &str) -> anyhow::Result<Option<f64>> {
+    off_or_number("--seam-ramp", value, "a factor above 1")
 }
 
 /// Refuses a stage's longest simulated time (`--sew-max`, `--settle-max`) that is not
@@ -176,6 +191,8 @@ pub struct GarmentReport {
     pub integrator: crate::cloth::integrate::Integrator,
     /// Implicit Euler's bending Hessian (`--bending-hessian`).
     pub bending_hessian: crate::cloth::integrate::direct::BendingHessian,
+    /// The drape's seam ramp, a factor a check (`--seam-ramp`), or `null`: off.
+    pub seam_ramp: Option<f64>,
     /// Whether the body is closed (inside tests, and moving seams out of it, need it).
     pub body_closed: bool,
     /// Each closed ring of the pattern against the body's girth where it sits, checked before
@@ -436,6 +453,7 @@ pub(super) fn settings(args: &GarmentArgs) -> anyhow::Result<GarmentSettings> {
     s.perturb = args.perturb;
     s.clear_panels = !args.keep_placement;
     s.sew_spacing = sew_spacing(&args.sew_spacing)?;
+    s.seam_ramp = seam_ramp(&args.seam_ramp)?;
     s.assemble.rim_bending = !args.no_rim_bending;
     s.self_collision = (!args.no_self_collision).then(|| SelfCollisionOptions {
         friction: args.cloth_friction,
@@ -790,6 +808,7 @@ pub fn run(args: GarmentArgs) -> anyhow::Result<()> {
         spacing: args.spacing,
         integrator: args.integrator,
         bending_hessian: args.bending_hessian,
+        seam_ramp: seam_ramp(&args.seam_ramp)?,
         body_closed: c.closed,
         fit_check: fit,
         outcome,

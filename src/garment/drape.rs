@@ -169,7 +169,17 @@ pub struct GarmentSettings {
     /// `assemble.spacing` for the drape (`transfer`), when it is coarser than that spacing;
     /// `None` (default): sew and drape at the same spacing.
     pub sew_spacing: Option<f64>,
+    /// The drape's seams stiffen from the sewing's strongest pull to their full constant by
+    /// this factor every `check_every`, gravity and friction on ([`SEAM_RAMP`], 2: 16 checks,
+    /// 0.32 s, for cotton at 1 cm, counted in the drape). `None` (default): at their full
+    /// constant at once, which shuts the gaps sewing left in one step and stretches the cloth
+    /// beside them (README, `garment --seam-ramp`: what each does to the issue's garments).
+    pub seam_ramp: Option<f64>,
 }
+
+/// The factor a check by which the drape's seams stiffen when ramped
+/// ([`GarmentSettings::seam_ramp`]; measured in the README).
+pub const SEAM_RAMP: f64 = 2.0;
 
 /// Where a garment's waist edges are held while sewing (`waist`).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -235,6 +245,7 @@ impl Default for GarmentSettings {
             perturb: None,
             clear_panels: true,
             sew_spacing: None,
+            seam_ramp: None,
         }
     }
 }
@@ -291,6 +302,11 @@ impl GarmentSettings {
                 bad(field, v, "must be a number, 0 or more".into());
             }
         }
+        if let Some(f) = self.seam_ramp {
+            if !(f.is_finite() && f > 1.0) {
+                bad("seam_ramp", f, "must be a factor above 1 (or off)".into());
+            }
+        }
         if let WaistHold::Level(z) = self.hold_waist {
             if !z.is_finite() {
                 bad("hold_waist", z, "must be a finite height, m".into());
@@ -338,6 +354,9 @@ pub struct StageReport {
     /// would rebuild the solver, whose contact weights start afresh, and jolt the cloth);
     /// `None` for sewing, or for a drape shorter than a frame.
     pub moving_fraction: Option<f64>,
+    /// Drape: the checks the seams were ramped over ([`GarmentSettings::seam_ramp`]; 0 when
+    /// off, and for sewing).
+    pub ramp_checks: usize,
 }
 
 /// A sewn and draped garment.
@@ -762,11 +781,33 @@ pub fn settle(
 ) -> Result<StageReport, SimError> {
     let dt = settings.solver.dt;
     world.model.gravity = GRAVITY;
+    // The seams stiffen from the sewing's strongest pull to their full constant (`seam_ramp`).
+    let mut ramp = (0.0, 0u64, 0.0, 0usize);
+    if let Some(factor) = settings.seam_ramp {
+        let m = &world.model;
+        let from = SEW_WEIGHT_MAX * m.mass.iter().sum::<f64>() / (m.len().max(1) as f64 * dt * dt);
+        let chunk = ((settings.check_every / dt).round() as u64).max(1);
+        let max_steps = ((settings.settle_max / dt).round() as u64).max(1);
+        for k in ramp_levels(from, seam_k, factor) {
+            if ramp.1 + chunk >= max_steps {
+                break;
+            }
+            set_seam_k(&mut world.model, k);
+            let quiet = &mut |_: u64, _: &World| Ok(false);
+            let stats = run_stage(world, settings, Stop::Steps(chunk), None, quiet, cancel)?;
+            ramp = (
+                ramp.0 + stats.time,
+                ramp.1 + stats.steps,
+                ramp.2 + stats.wall_seconds,
+                ramp.3 + 1,
+            );
+        }
+    }
     set_seam_k(&mut world.model, seam_k);
     // One run (the solver and its factorisation kept), the rest test at every frame.
     let frame = ((1.0 / 60.0 / dt).round() as u64).max(1);
     let limit = REST_SPEED * frame as f64 * dt;
-    let max_steps = ((settings.settle_max / dt).round() as u64).max(1);
+    let max_steps = ((settings.settle_max / dt).round() as u64).max(1) - ramp.1;
     let mut before = world.state.x.clone();
     let (mut quiet, mut last) = (0, None);
     let mut at_rest = |_: u64, w: &World| -> Result<bool, SimError> {
@@ -783,15 +824,35 @@ pub fn settle(
     let stop = Stop::Steps(max_steps);
     let stats = run_stage(world, settings, stop, Some(frame), &mut at_rest, cancel)?;
     Ok(StageReport {
-        time: stats.time,
-        steps: stats.steps,
-        wall_seconds: stats.wall_seconds,
+        time: ramp.0 + stats.time,
+        steps: ramp.1 + stats.steps,
+        wall_seconds: ramp.2 + stats.wall_seconds,
         seam_gap_max: seam_gaps(seams, &world.state.x).0,
         done: stats.at_rest,
         sew_weight: 0.0,
         exact_from: None,
         moving_fraction: last,
+        ramp_checks: ramp.3,
     })
+}
+
+/// The seam constants of the drape's first checks ([`GarmentSettings::seam_ramp`]): from the
+/// sewing's strongest pull `from`, N/m, times `factor` a check, up to `to`, the full constant
+/// (the last level; none if `from` is already `to` or more).
+///
+/// ```
+/// # use drapekit::garment::drape::ramp_levels;
+/// assert_eq!(ramp_levels(1.0, 10.0, 2.0), vec![2.0, 4.0, 8.0, 10.0]);
+/// assert!(ramp_levels(10.0, 10.0, 2.0).is_empty());
+/// ```
+pub fn ramp_levels(from: f64, to: f64, factor: f64) -> Vec<f64> {
+    let mut levels = Vec::new();
+    let mut k = from;
+    while k < to && factor > 1.0 {
+        k = (k * factor).min(to);
+        levels.push(k);
+    }
+    levels
 }
 
 /// One stage's run: `frame` every `frames` steps (`true`: at rest), ended by `cancel`.
