@@ -808,7 +808,7 @@ pub fn run(args: GarmentArgs) -> anyhow::Result<()> {
         spacing: args.spacing,
         integrator: args.integrator,
         bending_hessian: args.bending_hessian,
-        seam_ramp: seam_ramp(&args.seam_ramp)?,
+        seam_ramp: settings.seam_ramp,
         body_closed: c.closed,
         fit_check: fit,
         outcome,

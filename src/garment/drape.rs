@@ -561,6 +561,11 @@ fn followers(m: &ClothModel, seams: &[SeamPair], held: &[u32]) -> Vec<Option<usi
         .collect()
 }
 
+/// The mean particle mass of `model`, kg: the scale of the seams' pull (`m / h^2`).
+fn mean_mass(model: &ClothModel) -> f64 {
+    model.mass.iter().sum::<f64>() / model.len().max(1) as f64
+}
+
 /// Sets the constant of every seam spring, N/m.
 pub fn set_seam_k(model: &mut ClothModel, k: f64) {
     for s in model
@@ -595,8 +600,7 @@ pub fn sew(
     for c in &mut world.colliders {
         c.friction = Some(0.0);
     }
-    let m = &world.model;
-    let mean_mass = m.mass.iter().sum::<f64>() / m.len().max(1) as f64;
+    let mean_mass = mean_mass(&world.model);
     set_seam_k(&mut world.model, weight * mean_mass / (dt * dt));
     let mut report = StageReport::default();
     let gaps = seam_gaps(seams, &world.state.x);
@@ -784,8 +788,7 @@ pub fn settle(
     // The seams stiffen from the sewing's strongest pull to their full constant (`seam_ramp`).
     let mut ramp = (0.0, 0u64, 0.0, 0usize);
     if let Some(factor) = settings.seam_ramp {
-        let m = &world.model;
-        let from = SEW_WEIGHT_MAX * m.mass.iter().sum::<f64>() / (m.len().max(1) as f64 * dt * dt);
+        let from = SEW_WEIGHT_MAX * mean_mass(&world.model) / (dt * dt);
         let chunk = ((settings.check_every / dt).round() as u64).max(1);
         let max_steps = ((settings.settle_max / dt).round() as u64).max(1);
         for k in ramp_levels(from, seam_k, factor) {
