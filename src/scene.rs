@@ -275,6 +275,7 @@ struct GarmentFile {
     perturb: Option<u64>,
     keep_placement: Option<bool>,
     sew_spacing: Option<f64>,
+    seam_ramp: Option<f64>,
 }
 
 /// `garment.hold_waist`: `"off"`, `"auto"` or a height in the scene's units.
@@ -1296,6 +1297,7 @@ fn garment_spec(
     settings.perturb = g.perturb;
     settings.clear_panels = !g.keep_placement.unwrap_or(false);
     settings.sew_spacing = length(g.sew_spacing);
+    settings.seam_ramp = g.seam_ramp;
     if g.self_collision == Some(false) {
         settings.self_collision = None;
     }

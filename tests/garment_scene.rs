@@ -131,11 +131,15 @@ fn a_garment_scene_drapes_as_the_garment_command_does() {
 }
 
 #[test]
-fn a_garment_scenes_perturb_is_the_commands() {
+fn a_garment_scenes_perturb_and_seam_ramp_are_the_commands() {
     let dir = tube_folder();
     let d = dir.path();
     let scene = d.join("tube.toml");
-    std::fs::write(&scene, tube_scene("settle_max = 0.1\nperturb = 3")).unwrap();
+    std::fs::write(
+        &scene,
+        tube_scene("settle_max = 0.1\nperturb = 3\nseam_ramp = 2.0"),
+    )
+    .unwrap();
     let (by_scene, by_command) = (d.join("scene_out"), d.join("command_out"));
     let args = [
         "drape",
@@ -143,14 +147,14 @@ fn a_garment_scenes_perturb_is_the_commands() {
         "-o",
         by_scene.to_str().unwrap(),
     ];
-    run_json(&[&args[..], &["--json"]].concat());
+    let s = run_json(&[&args[..], &["--json"]].concat());
     let pattern = d.join("tube_specification.json");
     let body = d.join("column.obj");
     let mut args = vec!["garment", pattern.to_str().unwrap(), "--body"];
     args.extend([body.to_str().unwrap(), "-o", by_command.to_str().unwrap()]);
     args.extend(["--spacing", "0.02", "--settle-max", "0.1", "--json"]);
     let plain = run_json(&args);
-    args.extend(["--perturb", "3"]);
+    args.extend(["--perturb", "3", "--seam-ramp", "2"]);
     let g = run_json(&args);
     let read = |p: &Path| {
         drapekit::io::read_mesh(p, &Default::default())
@@ -165,7 +169,16 @@ fn a_garment_scenes_perturb_is_the_commands() {
     for (p, q) in a.positions.iter().zip(&b.positions) {
         assert_eq!(*p, Point3::new(q.x, -q.z, q.y));
     }
-    // And not the unperturbed run's.
+    // Both ramped the seams over the drape's first checks; the plain run did not.
+    assert_eq!(s["seam_ramp"], 2.0);
+    assert_eq!(s["drape"]["ramp_checks"], g["drape"]["ramp_checks"]);
+    assert!(
+        g["drape"]["ramp_checks"].as_u64().unwrap() > 0,
+        "{}",
+        g["drape"]
+    );
+    assert_eq!(plain["drape"]["ramp_checks"], 0);
+    // And not the plain run's.
     assert_ne!(plain["drape"], g["drape"]);
 }
 
@@ -387,6 +400,12 @@ fn bad_garment_keys_are_refused_by_key_before_work() {
             "key 'garment.hold_waist'",
             "must be a finite height",
         ),
+        (
+            "seam_ramp = 1",
+            "key 'garment.seam_ramp'",
+            "must be a factor above 1",
+        ),
+        ("seam_ramp = \"off\"", "seam_ramp", "expected f64"),
         ("perturb = -1", "perturb = -1", "expected u64"),
         ("perturb = 0.5", "perturb = 0.5", "expected u64"),
         ("size = 40", "unknown field `size`", "expected one of"),

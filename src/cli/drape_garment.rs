@@ -38,6 +38,8 @@ pub struct GarmentSceneReport {
     pub fabric: String,
     /// Particle spacing.
     pub spacing: f64,
+    /// The drape's seam ramp, a factor a check (`seam_ramp`), or `null`: off.
+    pub seam_ramp: Option<f64>,
     /// Per object: what `drape` reports of it.
     pub objects: Vec<ObjectReport>,
     /// Each closed ring of the pattern against the scene's closed objects where it sits,
@@ -184,6 +186,7 @@ pub(super) fn run(args: &DrapeArgs, sc: Scene, start: std::time::Instant) -> any
         pattern: spec.path.display().to_string(),
         fabric: spec.fabric_name.clone(),
         spacing: settings.assemble.spacing * to_units,
+        seam_ramp: settings.seam_ramp,
         objects: object_reports(&world, to_units, object_files),
         fit_check: fit,
         warnings,
