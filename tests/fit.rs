@@ -364,6 +364,11 @@ fn malformed_files_are_refused_with_the_place() {
             "units = \"cubits\"\nstature = 170\nwaist_girth = 70\nbust_girth = 90\n",
             "key 'units': unknown unit 'cubits'",
         ),
+        (
+            "i.toml",
+            "stature = 170\nwaist_girth = 70\nbust_girth = -3\nwaist_height = 200\n",
+            "i.toml: 2 problems:\n  key 'bust_girth': must be a positive number, got -3\n  key 'waist_height': 200 is not below the stature 170",
+        ),
     ] {
         let dir = tempfile::tempdir().unwrap();
         let src = dir.path().join(name);

@@ -36,6 +36,12 @@ pub enum FitError {
         key: String,
         message: String,
     },
+    /// Several values outside what they may be: (key, message) each.
+    #[error("{}: {} problems:{}", path.display(), problems.len(), problems.iter().map(|(k, m)| format!("\n  key '{k}': {m}")).collect::<String>())]
+    Keys {
+        path: PathBuf,
+        problems: Vec<(String, String)>,
+    },
     /// Too few sections for a surface.
     #[error("{found} section(s): a surface needs at least 3 at different heights")]
     TooFewSections { found: usize },
@@ -105,6 +111,19 @@ pub enum FitError {
 }
 
 impl FitError {
+    /// `Ok` for no problems, [`FitError::Key`] for one, [`FitError::Keys`] for more.
+    pub fn from_keys(path: &Path, mut problems: Vec<(String, String)>) -> Result<(), FitError> {
+        let path = path.to_path_buf();
+        match problems.len() {
+            0 => Ok(()),
+            1 => {
+                let (key, message) = problems.remove(0);
+                Err(FitError::Key { path, key, message })
+            }
+            _ => Err(FitError::Keys { path, problems }),
+        }
+    }
+
     /// This error with the input file it concerns, when it does not name one already (the
     /// problems of sections and scan levels).
     pub fn in_file(self, path: &Path) -> FitError {

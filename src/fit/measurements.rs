@@ -313,57 +313,52 @@ fn linear(xs: &[f64], ys: &[f64], x: f64) -> f64 {
     ys[i] + (ys[i + 1] - ys[i]) * (x - xs[i]) / (xs[i + 1] - xs[i])
 }
 
-/// The sections and girth targets of the shape model for `m`, about `levels` sections.
-pub fn sections(
-    m: &Measurements,
-    path: &Path,
-    levels: usize,
-) -> Result<(Vec<Section>, Vec<GirthTarget>, Units), FitError> {
-    let key_err = |key: &str, message: String| FitError::Key {
-        path: path.to_path_buf(),
-        key: key.into(),
-        message,
-    };
-    let units: Units = m
-        .units
-        .as_deref()
-        .unwrap_or("cm")
-        .parse()
-        .map_err(|e: String| key_err("units", e))?;
-    let stature = m
-        .stature
-        .ok_or_else(|| key_err("stature", "is required".into()))?;
-    let positive = |key: &str, v: Option<f64>| -> Result<Option<f64>, FitError> {
-        match v {
-            Some(x) if !(x.is_finite() && x > 0.0) => Err(key_err(
-                key,
-                format!("must be a positive number, got {}", short(x)),
-            )),
-            _ => Ok(v),
-        }
-    };
-    positive("stature", Some(stature))?;
-    if !(STATURE_RANGE.0..=STATURE_RANGE.1).contains(&stature) {
-        return Err(key_err(
-            "stature",
-            format!(
-                "{} is outside {:e}..{:e} (beyond, the shape model's arithmetic leaves the range of an f64)",
-                short(stature), STATURE_RANGE.0, STATURE_RANGE.1
-            ),
-        ));
+/// The problems of a measurement set, by key, collected so that all are reported at once.
+#[derive(Default)]
+struct Problems(Vec<(String, String)>);
+
+impl Problems {
+    fn bad(&mut self, key: &str, message: String) {
+        self.0.push((key.to_string(), message));
     }
-    let girth_keys = [
+
+    /// Whether `key` has a problem already.
+    fn has(&self, key: &str) -> bool {
+        self.0.iter().any(|(k, _)| k == key)
+    }
+
+    /// `v` when absent or a positive number; else a problem, and `None`.
+    fn positive(&mut self, key: &str, v: Option<f64>) -> Option<f64> {
+        match v {
+            Some(x) if !(x.is_finite() && x > 0.0) => {
+                self.bad(key, format!("must be a positive number, got {}", short(x)));
+                None
+            }
+            _ => v,
+        }
+    }
+
+    /// `Ok` when there is no problem; else the error naming each (emptied for the next checks).
+    fn take(&mut self, path: &Path) -> Result<(), FitError> {
+        FitError::from_keys(path, std::mem::take(&mut self.0))
+    }
+}
+
+/// The girths: (key, level, value).
+fn girth_keys(m: &Measurements) -> [(&'static str, &'static str, Option<f64>); 6] {
+    [
         ("neck_base_girth", "neck_base", m.neck_base_girth),
         ("bust_girth", "bust", m.bust_girth),
         ("underbust_girth", "underbust", m.underbust_girth),
         ("waist_girth", "waist", m.waist_girth),
         ("top_hip_girth", "top_hip", m.top_hip_girth),
         ("hip_girth", "hip", m.hip_girth),
-    ];
-    for (k, _, v) in girth_keys {
-        positive(k, v)?;
-    }
-    let across = [
+    ]
+}
+
+/// The lengths across the body (girths, widths, depths): (key, value).
+fn across_keys(m: &Measurements) -> [(&'static str, Option<f64>); 19] {
+    [
         ("neck_base_girth", m.neck_base_girth),
         ("bust_girth", m.bust_girth),
         ("underbust_girth", m.underbust_girth),
@@ -383,24 +378,13 @@ pub fn sections(
         ("top_hip_depth", m.top_hip_depth),
         ("hip_width", m.hip_width),
         ("hip_depth", m.hip_depth),
-    ];
-    for (k, v) in across {
-        if let Some(v) = v.filter(|&v| v > MAX_TO_STATURE * stature) {
-            return Err(key_err(
-                k,
-                format!(
-                    "{} is more than {MAX_TO_STATURE} times the stature {}: no body is that wide",
-                    short(v),
-                    short(stature)
-                ),
-            ));
-        }
-    }
-    let given_girths = girth_keys.iter().filter(|g| g.2.is_some()).count();
-    if given_girths < 2 {
-        return Err(key_err("*_girth", format!("at least two girths are required, {given_girths} given (neck_base, bust, underbust, waist, top_hip, hip)")));
-    }
-    let heights: [(&str, Option<f64>); 10] = [
+    ]
+}
+
+/// Each level's height key and value, in the order of `LEVELS` (the chest and the neck's top
+/// have none: `""`).
+fn height_keys(m: &Measurements) -> [(&'static str, Option<f64>); 10] {
+    [
         ("bottom_height", m.bottom_height),
         ("hip_height", m.hip_height),
         ("top_hip_height", m.top_hip_height),
@@ -411,79 +395,12 @@ pub fn sections(
         ("shoulder_height", m.shoulder_height),
         ("neck_base_height", m.neck_base_height),
         ("", None),
-    ];
-    for (k, v) in heights {
-        if let Some(h) = positive(k, v)? {
-            if h >= stature {
-                return Err(key_err(
-                    k,
-                    format!("{h} is not below the stature {stature}"),
-                ));
-            }
-        }
-    }
-    // Levels: given heights as anchors, defaults placed proportionally between them.
-    let mut anchors_f = vec![0.0];
-    let mut anchors_h = vec![0.0];
-    for (i, (_, v)) in heights.iter().enumerate() {
-        if let Some(h) = v {
-            anchors_f.push(LEVELS[i].height);
-            anchors_h.push(*h);
-        }
-    }
-    anchors_f.push(1.0);
-    anchors_h.push(stature);
-    let z: Vec<f64> = LEVELS
-        .iter()
-        .enumerate()
-        .map(|(i, l)| {
-            heights[i]
-                .1
-                .unwrap_or_else(|| linear(&anchors_f, &anchors_h, l.height))
-        })
-        .collect();
-    for i in 1..z.len() {
-        if z[i] - z[i - 1] < MIN_LEVEL_GAP * stature {
-            let name = |j: usize| {
-                if heights[j].0.is_empty() {
-                    format!("the {} level (default)", LEVELS[j].name)
-                } else {
-                    heights[j].0.to_string()
-                }
-            };
-            let why = if z[i] <= z[i - 1] {
-                String::new()
-            } else {
-                format!(" by {MIN_LEVEL_GAP:e} of the stature (levels closer than that make the model's slopes overflow)")
-            };
-            return Err(key_err(
-                heights[i].0,
-                format!(
-                    "{} at {} is not above {} at {}{why}",
-                    name(i),
-                    z[i],
-                    name(i - 1),
-                    z[i - 1]
-                ),
-            ));
-        }
-    }
-    // Girths: given, or default times the interpolated given/default ratio.
-    let level_of = |name: &str| LEVELS.iter().position(|l| l.name == name).unwrap();
-    let mut rz = Vec::new();
-    let mut rr = Vec::new();
-    for (_, name, v) in girth_keys {
-        if let Some(g) = v {
-            let i = level_of(name);
-            rz.push(z[i]);
-            rr.push(g / (LEVELS[i].girth * stature));
-        }
-    }
-    let mut order: Vec<usize> = (0..rz.len()).collect();
-    order.sort_by(|&a, &b| rz[a].total_cmp(&rz[b]));
-    let (rz, rr): (Vec<f64>, Vec<f64>) = order.iter().map(|&i| (rz[i], rr[i])).unzip();
-    let scale_at = |h: f64| linear(&rz, &rr, h);
-    let widths: [(Option<f64>, Option<f64>); 10] = [
+    ]
+}
+
+/// Each level's given width and depth, in the order of `LEVELS`.
+fn width_keys(m: &Measurements) -> [(Option<f64>, Option<f64>); 10] {
+    [
         (None, None),
         (m.hip_width, m.hip_depth),
         (m.top_hip_width, m.top_hip_depth),
@@ -494,37 +411,195 @@ pub fn sections(
         (m.shoulder_width, None),
         (m.neck_base_width, m.neck_base_depth),
         (None, None),
-    ];
-    let mut girth = vec![0.0; LEVELS.len()];
-    let mut ratio = vec![0.0; LEVELS.len()];
-    let mut expo = vec![0.0; LEVELS.len()];
-    let mut offset = vec![0.0; LEVELS.len()];
+    ]
+}
+
+/// The units and the stature, every problem of the keys given to `p` (stand-ins then:
+/// centimetres, a stature of 1).
+fn check_keys(m: &Measurements, p: &mut Problems) -> (Units, f64) {
+    let units = m
+        .units
+        .as_deref()
+        .unwrap_or("cm")
+        .parse()
+        .unwrap_or_else(|e| {
+            p.bad("units", e);
+            Units::Cm
+        });
+    let stature = match m.stature {
+        None => {
+            p.bad("stature", "is required".into());
+            None
+        }
+        Some(s) => p.positive("stature", Some(s)).filter(|&s| {
+            let inside = (STATURE_RANGE.0..=STATURE_RANGE.1).contains(&s);
+            if !inside {
+                let m = format!(
+                    "{} is outside {:e}..{:e} (beyond, the shape model's arithmetic leaves the range of an f64)",
+                    short(s), STATURE_RANGE.0, STATURE_RANGE.1
+                );
+                p.bad("stature", m);
+            }
+            inside
+        }),
+    };
+    check_girths(m, stature, p);
+    check_heights(m, stature, p);
+    (units, stature.unwrap_or(1.0))
+}
+
+/// The girths positive, at least two of them, and no length across the body over
+/// `MAX_TO_STATURE` statures (`stature`: `None` when it has a problem).
+fn check_girths(m: &Measurements, stature: Option<f64>, p: &mut Problems) {
+    let girths = girth_keys(m);
+    for (k, _, v) in girths {
+        p.positive(k, v);
+    }
+    for (k, v) in across_keys(m) {
+        let (Some(s), Some(v)) = (stature, v) else {
+            continue;
+        };
+        if v > MAX_TO_STATURE * s && !p.has(k) {
+            let m = format!(
+                "{} is more than {MAX_TO_STATURE} times the stature {}: no body is that wide",
+                short(v),
+                short(s)
+            );
+            p.bad(k, m);
+        }
+    }
+    let given = girths.iter().filter(|g| g.2.is_some()).count();
+    if given < 2 {
+        p.bad("*_girth", format!("at least two girths are required, {given} given (neck_base, bust, underbust, waist, top_hip, hip)"));
+    }
+}
+
+/// The given heights positive and below the stature.
+fn check_heights(m: &Measurements, stature: Option<f64>, p: &mut Problems) {
+    for (k, v) in height_keys(m) {
+        if let (Some(h), Some(s)) = (p.positive(k, v), stature) {
+            if h >= s {
+                p.bad(k, format!("{h} is not below the stature {s}"));
+            }
+        }
+    }
+}
+
+/// The height of every level: given, or its default placed proportionally between the given
+/// heights below and above it (the floor and the stature as the ends).
+fn level_heights(m: &Measurements, stature: f64) -> Vec<f64> {
+    let heights = height_keys(m);
+    let mut anchors_f = vec![0.0];
+    let mut anchors_h = vec![0.0];
+    for (i, (_, v)) in heights.iter().enumerate() {
+        if let Some(h) = v {
+            anchors_f.push(LEVELS[i].height);
+            anchors_h.push(*h);
+        }
+    }
+    anchors_f.push(1.0);
+    anchors_h.push(stature);
+    LEVELS
+        .iter()
+        .enumerate()
+        .map(|(i, l)| {
+            heights[i]
+                .1
+                .unwrap_or_else(|| linear(&anchors_f, &anchors_h, l.height))
+        })
+        .collect()
+}
+
+/// Each level at least `MIN_LEVEL_GAP` statures above the one below (the problem under the
+/// upper level's key when it was given, else the lower one's, else `stature`).
+fn check_level_gaps(m: &Measurements, z: &[f64], stature: f64, p: &mut Problems) {
+    let heights = height_keys(m);
+    let given = |j: usize| heights[j].1.map(|_| heights[j].0);
+    let name = |j: usize| match given(j) {
+        Some(key) => key.to_string(),
+        None => format!("the {} level (default)", LEVELS[j].name),
+    };
+    for i in 1..z.len() {
+        if z[i] - z[i - 1] >= MIN_LEVEL_GAP * stature {
+            continue;
+        }
+        let why = if z[i] <= z[i - 1] {
+            String::new()
+        } else {
+            format!(" by {MIN_LEVEL_GAP:e} of the stature (levels closer than that make the model's slopes overflow)")
+        };
+        let key = given(i).or(given(i - 1)).unwrap_or("stature");
+        let m = format!(
+            "{} at {} is not above {} at {}{why}",
+            name(i),
+            z[i],
+            name(i - 1),
+            z[i - 1]
+        );
+        p.bad(key, m);
+    }
+}
+
+/// The shape of every level: girth, depth/width ratio, exponent and front-back offset.
+struct LevelShapes {
+    girth: Vec<f64>,
+    ratio: Vec<f64>,
+    exponent: Vec<f64>,
+    offset: Vec<f64>,
+}
+
+/// The levels' shapes: each girth given, or its default times the ratio given/default of the
+/// given girths interpolated linearly in height at `z`; a given width or depth sets the ratio.
+fn level_shapes(m: &Measurements, z: &[f64], stature: f64, p: &mut Problems) -> LevelShapes {
+    let girths = girth_keys(m);
+    let level_of = |name: &str| LEVELS.iter().position(|l| l.name == name).unwrap();
+    let mut rz = Vec::new();
+    let mut rr = Vec::new();
+    for (_, name, v) in girths {
+        if let Some(g) = v {
+            let i = level_of(name);
+            rz.push(z[i]);
+            rr.push(g / (LEVELS[i].girth * stature));
+        }
+    }
+    let mut order: Vec<usize> = (0..rz.len()).collect();
+    order.sort_by(|&a, &b| rz[a].total_cmp(&rz[b]));
+    let (rz, rr): (Vec<f64>, Vec<f64>) = order.iter().map(|&i| (rz[i], rr[i])).unzip();
+    let scale_at = |h: f64| linear(&rz, &rr, h);
+    let widths = width_keys(m);
+    let n = LEVELS.len();
+    let mut s = LevelShapes {
+        girth: vec![0.0; n],
+        ratio: LEVELS.iter().map(|l| l.ratio).collect(),
+        exponent: LEVELS.iter().map(|l| l.exponent).collect(),
+        offset: LEVELS.iter().map(|l| l.offset * stature).collect(),
+    };
     for (i, l) in LEVELS.iter().enumerate() {
-        expo[i] = l.exponent;
-        offset[i] = l.offset * stature;
-        ratio[i] = l.ratio;
-        let given = girth_keys.iter().find(|g| g.1 == l.name).and_then(|g| g.2);
         if l.name == "shoulder" {
             let w = m
                 .shoulder_width
                 .unwrap_or(SHOULDER_WIDTH * stature * scale_at(z[i]));
-            positive("shoulder_width", Some(w))?;
-            girth[i] = w * perimeter(&superellipse(0.5, l.ratio, l.exponent, 0.0));
+            p.positive("shoulder_width", Some(w));
+            s.girth[i] = w * perimeter(&superellipse(0.5, l.ratio, l.exponent, 0.0));
             continue;
         }
-        girth[i] = given.unwrap_or(l.girth * stature * scale_at(z[i]));
+        let given = girths.iter().find(|g| g.1 == l.name).and_then(|g| g.2);
+        s.girth[i] = given.unwrap_or(l.girth * stature * scale_at(z[i]));
         let (w, d) = widths[i];
-        if let Some(r) = ratio_for(girth[i], l.exponent, w, d) {
+        if let Some(r) = ratio_for(s.girth[i], l.exponent, w, d) {
             if !(r.is_finite() && r > 0.05 && r < 20.0) {
-                return Err(key_err(
-                    &format!("{}_width", l.name),
-                    "the width and depth do not fit the girth".into(),
-                ));
+                let m = "the width and depth do not fit the girth".into();
+                let side = if w.is_some() { "width" } else { "depth" };
+                p.bad(&format!("{}_{side}", l.name), m);
             }
-            ratio[i] = r;
+            s.ratio[i] = r;
         }
     }
-    // Section heights: every level, and even spacing in between.
+    s
+}
+
+/// The section heights: every level, and even spacing in between, about `levels` in all.
+fn section_heights(z: &[f64], levels: usize) -> Vec<f64> {
     let span = z[z.len() - 1] - z[0];
     let mut hs = vec![z[0]];
     for w in z.windows(2) {
@@ -535,20 +610,39 @@ pub fn sections(
             hs.push(w[0] + (w[1] - w[0]) * p as f64 / parts as f64);
         }
     }
-    let sections = hs
-        .iter()
-        .map(|&h| {
-            let g = pchip(&z, &girth, h);
-            let r = pchip(&z, &ratio, h);
-            let p = pchip(&z, &expo, h);
-            let c = pchip(&z, &offset, h);
-            Section {
-                height: h,
-                points: section_with_girth(g, r, p, c),
-            }
+    hs
+}
+
+/// The sections and girth targets of the shape model for `m`, about `levels` sections. Every
+/// problem of the keys is reported at once (`FitError::Key` for one, `FitError::Keys` for
+/// more).
+pub fn sections(
+    m: &Measurements,
+    path: &Path,
+    levels: usize,
+) -> Result<(Vec<Section>, Vec<GirthTarget>, Units), FitError> {
+    let mut p = Problems::default();
+    let (units, stature) = check_keys(m, &mut p);
+    p.take(path)?;
+    let z = level_heights(m, stature);
+    check_level_gaps(m, &z, stature, &mut p);
+    p.take(path)?;
+    let shapes = level_shapes(m, &z, stature, &mut p);
+    p.take(path)?;
+    let sections = section_heights(&z, levels)
+        .into_iter()
+        .map(|h| Section {
+            height: h,
+            points: section_with_girth(
+                pchip(&z, &shapes.girth, h),
+                pchip(&z, &shapes.ratio, h),
+                pchip(&z, &shapes.exponent, h),
+                pchip(&z, &shapes.offset, h),
+            ),
         })
         .collect();
-    let targets = girth_keys
+    let level_of = |name: &str| LEVELS.iter().position(|l| l.name == name).unwrap();
+    let targets = girth_keys(m)
         .iter()
         .filter_map(|(_, name, v)| {
             v.map(|g| GirthTarget {
@@ -668,6 +762,40 @@ mod tests {
             sections(&none, p, 41).unwrap_err().to_string(),
             "m.toml: key 'stature': is required"
         );
+    }
+
+    /// The keys of the problems `sections` finds in the measurements file `text`.
+    fn problem_keys(text: &str) -> Vec<String> {
+        let p = Path::new("m.toml");
+        match sections(&read_str(text, p).unwrap(), p, 41) {
+            Err(FitError::Key { key, .. }) => vec![key],
+            Err(FitError::Keys { problems, .. }) => problems.into_iter().map(|(k, _)| k).collect(),
+            other => panic!("{text}: {:?}", other.map(|_| ())),
+        }
+    }
+
+    #[test]
+    fn every_problem_of_a_measurement_set_is_reported_at_once() {
+        let keys = problem_keys(
+            "stature = 170\nwaist_girth = 70\nbust_girth = -3\nhip_girth = 5000\nwaist_height = 200\n",
+        );
+        assert_eq!(keys, ["bust_girth", "hip_girth", "waist_height"]);
+        let keys = problem_keys("units = \"cubits\"\nwaist_girth = 70\n");
+        assert_eq!(keys, ["units", "stature", "*_girth"]);
+        // An infinite girth is one problem, not also "more than 10 statures".
+        assert_eq!(
+            problem_keys("stature = 170\nwaist_girth = 70\nbust_girth = inf\n"),
+            ["bust_girth"]
+        );
+        // A default level out of order is named by the given heights round it, never by an
+        // empty key or the key of a height that was not given.
+        let keys = problem_keys("stature = 170\nbust_girth = 90\nwaist_girth = 70\nshoulder_height = 120\nbust_height = 125\n");
+        assert_eq!(keys, ["bust_height", "shoulder_height"]);
+        let keys = problem_keys("stature = 170\nbust_girth = 90\nwaist_girth = 70\nbust_height = 100\nwaist_height = 110\n");
+        assert_eq!(keys, ["waist_height", "bust_height"]);
+        // A depth that cannot fit its girth is named as the depth.
+        let keys = problem_keys("stature = 170\nbust_girth = 90\nwaist_girth = 70\nwaist_width = 1\nhip_girth = 95\nhip_depth = 0.5\n");
+        assert_eq!(keys, ["hip_depth", "waist_width"]);
     }
 
     #[test]
