@@ -296,25 +296,68 @@ fn roles(el: &Element) -> Roles {
     Roles { xyz, indices }
 }
 
-/// Reads PLY from `bytes` (`path` names the file in messages).
+const FMT: &str = "PLY";
+
+/// Reads PLY from `bytes` (`path` names the file in messages). Every problem of the records
+/// is listed (a coordinate that is not finite, a face index that is not a vertex, a face of
+/// fewer than three corners); reading stops only where the records can no longer be counted
+/// (the file ends early, a line has too few values, a list length is not a count).
 pub fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<ReadOutput, IoError> {
-    const FMT: &str = "PLY";
     let header = parse_header(bytes).map_err(|(at, kind)| malformed(path, FMT, at, kind))?;
+    let mut warnings = header_warnings(path, &header)?;
+    let mut body = BodyReader::new(path, &header, bytes);
+    for el in &header.elements {
+        body.element(el)?;
+    }
+    warnings.extend(body.notes());
+    let BodyReader {
+        records: r,
+        mut problems,
+        ..
+    } = body;
+    let n = r.positions.len();
+    for (ring, at) in r.polys.iter().zip(&r.face_at) {
+        for &c in ring.iter().filter(|&&c| c as usize >= n) {
+            let kind = ProblemKind::IndexOutOfRange {
+                index: i64::from(c),
+                count: n as u64,
+            };
+            problems.push(at.clone(), kind);
+        }
+    }
+    problems.check(path, FMT)?;
+    super::check_vertex_count(path, n)?;
+    let (faces, stats) = r.polys.triangulate(&r.positions, opts.quad_split);
+    let info = ReadInfo {
+        format: match header.encoding {
+            Encoding::Ascii => "ply-ascii",
+            Encoding::Little => "ply-binary-le",
+            Encoding::Big => "ply-binary-be",
+        }
+        .into(),
+        vertices_in_file: n,
+        polygons: stats,
+        warnings,
+        ..ReadInfo::default()
+    };
+    Ok(ReadOutput {
+        texcoords: None,
+        mesh: TriMesh::new(r.positions, faces),
+        info,
+    })
+}
+
+/// The header's warnings (elements skipped, faces without indices); an error when the vertex
+/// element lacks a scalar `x`, `y` or `z`.
+fn header_warnings(path: &Path, header: &Header) -> Result<Vec<String>, IoError> {
     let mut warnings = header.warnings.clone();
     for el in &header.elements {
         if el.name == "vertex" {
             for c in ["x", "y", "z"] {
-                if !el
-                    .props
-                    .iter()
-                    .any(|p| p.name == c && matches!(p.ty, PropType::Scalar(_)))
-                {
-                    return Err(malformed(
-                        path,
-                        FMT,
-                        Location::File,
-                        ProblemKind::PlyMissingProperty { name: c.into() },
-                    ));
+                let scalar = |p: &Property| p.name == c && matches!(p.ty, PropType::Scalar(_));
+                if !el.props.iter().any(scalar) {
+                    let kind = ProblemKind::PlyMissingProperty { name: c.into() };
+                    return Err(malformed(path, FMT, Location::File, kind));
                 }
             }
         }
@@ -325,205 +368,299 @@ pub fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<ReadOutput,
             warnings.push(format!("{} '{}' element(s) skipped", el.count, el.name));
         }
     }
-    let body = &bytes[header.body..];
-    let mut positions: Vec<Point3> = Vec::new();
-    let mut polys = Polygons::default();
-    let mut face_at: Vec<Location> = Vec::new();
-    let mut ring: Vec<u32> = Vec::new();
-    let mut reader: Box<dyn ValueSource> = match header.encoding {
-        Encoding::Ascii => Box::new(AsciiSource {
-            text: body,
-            pos: 0,
-            line: header.lines,
-            tokens: Vec::new(),
-            next: 0,
-        }),
-        e => Box::new(BinarySource {
-            bytes: body,
-            pos: 0,
-            base: header.body as u64,
-            big: e == Encoding::Big,
-        }),
-    };
-    let mut extra_lines = 0u64;
-    let mut missing_lists = 0u64;
-    for el in &header.elements {
+    Ok(warnings)
+}
+
+/// What the records give.
+#[derive(Default)]
+struct Records {
+    positions: Vec<Point3>,
+    polys: Polygons,
+    /// Where each polygon's record starts.
+    face_at: Vec<Location>,
+    /// Records (ASCII lines) with values beyond the header's properties.
+    extra_lines: u64,
+    /// Records (ASCII lines) that end where their trailing lists begin.
+    missing_lists: u64,
+}
+
+/// Reads the body's records, element by element, collecting the problems it can read past.
+struct BodyReader<'a> {
+    path: &'a Path,
+    source: Box<dyn ValueSource + 'a>,
+    /// Whether the body is ASCII.
+    ascii: bool,
+    /// The body's length in bytes (a bound on what a count may allocate).
+    len: usize,
+    records: Records,
+    problems: Problems,
+    /// The current face's corners.
+    ring: Vec<u32>,
+}
+
+/// A record's values: read so far, and needed at least (each property one, and each list's
+/// items once its length is read).
+#[derive(Default)]
+struct Tally {
+    found: usize,
+    needed: usize,
+}
+
+/// The record being read: its element, number and where it starts.
+struct Record<'e> {
+    el: &'e Element,
+    roles: Roles,
+    index: u64,
+    at: Location,
+}
+
+impl<'a> BodyReader<'a> {
+    fn new(path: &'a Path, header: &Header, bytes: &'a [u8]) -> BodyReader<'a> {
+        let body = &bytes[header.body..];
+        let source: Box<dyn ValueSource + 'a> = match header.encoding {
+            Encoding::Ascii => Box::new(AsciiSource {
+                text: body,
+                pos: 0,
+                line: header.lines,
+                tokens: Vec::new(),
+                next: 0,
+            }),
+            e => Box::new(BinarySource {
+                bytes: body,
+                pos: 0,
+                base: header.body as u64,
+                big: e == Encoding::Big,
+            }),
+        };
+        BodyReader {
+            path,
+            source,
+            ascii: header.encoding == Encoding::Ascii,
+            len: body.len(),
+            records: Records::default(),
+            problems: Problems::default(),
+            ring: Vec::new(),
+        }
+    }
+
+    /// The error that stops reading: the problems so far and this one.
+    fn fatal(&mut self, at: Location, kind: ProblemKind) -> IoError {
+        let mut problems = std::mem::take(&mut self.problems);
+        problems.push(at, kind);
+        match problems.check(self.path, FMT) {
+            Err(e) => e,
+            Ok(()) => unreachable!("a problem was just recorded"),
+        }
+    }
+
+    /// Reads every record of `el`.
+    fn element(&mut self, el: &Element) -> Result<(), IoError> {
         // A binary record of no properties holds no bytes: there is nothing to read, however
         // large the count (2^64 - 1 would otherwise loop for ever over empty records).
-        if el.props.is_empty() && header.encoding != Encoding::Ascii {
-            continue;
+        if el.props.is_empty() && !self.ascii {
+            return Ok(());
         }
-        let r = roles(el);
+        let roles = roles(el);
         // Don't trust the count for allocation beyond what the file could hold.
-        let cap = (el.count as usize).min(body.len() / 2 + 1);
-        if r.xyz.is_some() {
-            positions.reserve(cap);
+        let cap = (el.count as usize).min(self.len / 2 + 1);
+        if roles.xyz.is_some() {
+            self.records.positions.reserve(cap);
         }
-        if r.indices.is_some() {
-            polys = Polygons::with_capacity(cap);
-            face_at.reserve(cap);
+        if roles.indices.is_some() {
+            self.records.polys = Polygons::with_capacity(cap);
+            self.records.face_at.reserve(cap);
         }
-        // Values a record needs at least: each scalar, and each list's length.
-        let needed = el.props.len();
-        let mut vals = [0.0f64; 3];
-        for i in 0..el.count {
-            let at = reader.location(&el.name, i);
-            let short = || {
-                malformed(
-                    path,
-                    FMT,
-                    at.clone(),
-                    ProblemKind::PlyShort {
-                        element: el.name.clone(),
-                        index: i,
-                        count: el.count,
-                    },
-                )
-            };
-            if !reader.begin_record() {
-                return Err(short());
-            }
-            let mut read_values = 0usize;
-            for (k, p) in el.props.iter().enumerate() {
-                let fail = |e: ValueError, read_values: usize| match e {
-                    ValueError::End => short(),
-                    ValueError::LineEnd => malformed(
-                        path,
-                        FMT,
-                        at.clone(),
-                        ProblemKind::PlyValueCount {
-                            element: el.name.clone(),
-                            index: i,
-                            found: read_values,
-                            needed,
-                        },
-                    ),
-                    ValueError::Bad(at, kind) => malformed(path, FMT, at, kind),
+        let mut rec = Record {
+            el,
+            roles,
+            index: 0,
+            at: Location::File,
+        };
+        for index in 0..el.count {
+            rec.index = index;
+            rec.at = self.source.location(&el.name, index);
+            self.record(&rec)?;
+        }
+        Ok(())
+    }
+
+    /// The error of a record cut short: the file ended, or its line did after `found` values.
+    fn short(&mut self, rec: &Record, e: ValueError, tally: &Tally) -> IoError {
+        let (el, index) = (rec.el.name.clone(), rec.index);
+        match e {
+            ValueError::End => {
+                let count = rec.el.count;
+                let kind = ProblemKind::PlyShort {
+                    element: el,
+                    index,
+                    count,
                 };
-                match p.ty {
-                    PropType::Scalar(t) => {
-                        let v = reader.value(t).map_err(|e| fail(e, read_values))?;
-                        read_values += 1;
-                        if let Some(xyz) = r.xyz {
-                            if let Some(c) = xyz.iter().position(|&x| x == k) {
-                                if let Err(kind) = coordinate(v, t) {
-                                    return Err(malformed(path, FMT, at.clone(), kind));
-                                }
-                                vals[c] = v;
-                            }
+                self.fatal(rec.at.clone(), kind)
+            }
+            ValueError::LineEnd => {
+                let kind = ProblemKind::PlyValueCount {
+                    element: el,
+                    index,
+                    found: tally.found,
+                    needed: tally.needed,
+                };
+                self.fatal(rec.at.clone(), kind)
+            }
+            ValueError::Bad(at, kind) => self.fatal(at, kind),
+        }
+    }
+
+    /// Reads one record: its scalars (the vertex's coordinates kept) and its lists (the face's
+    /// corners kept).
+    fn record(&mut self, rec: &Record) -> Result<(), IoError> {
+        if !self.source.begin_record() {
+            let tally = Tally::default();
+            return Err(self.short(rec, ValueError::End, &tally));
+        }
+        let mut tally = Tally {
+            found: 0,
+            needed: rec.el.props.len(),
+        };
+        let mut xyz = [0.0f64; 3];
+        for (k, p) in rec.el.props.iter().enumerate() {
+            match p.ty {
+                PropType::Scalar(t) => {
+                    let v = self.scalar(rec, t, &mut tally)?;
+                    let c = rec.roles.xyz.and_then(|r| r.iter().position(|&x| x == k));
+                    if let (Some(c), Some(v)) = (c, v) {
+                        if let Err(kind) = coordinate(v, t) {
+                            self.problems.push(rec.at.clone(), kind);
                         }
+                        xyz[c] = v;
                     }
-                    PropType::List(ct, it) => {
-                        let n = match reader.value(ct) {
-                            Ok(n) => n,
-                            // A line that stops exactly where trailing lists begin: read them as empty.
-                            Err(ValueError::LineEnd)
-                                if el.props[k..]
-                                    .iter()
-                                    .all(|q| matches!(q.ty, PropType::List(..))) =>
-                            {
-                                missing_lists += 1;
-                                break;
-                            }
-                            Err(e) => return Err(fail(e, read_values)),
-                        };
-                        read_values += 1;
-                        let whole = |value: f64, what: &'static str| {
-                            whole_number(value, what, &el.name, i)
-                                .map_err(|kind| malformed(path, FMT, at.clone(), kind))
-                        };
-                        whole(n, "list length")?;
-                        if n < 0.0 {
-                            return Err(malformed(
-                                path,
-                                FMT,
-                                at.clone(),
-                                ProblemKind::NegativeCount { count: n as i64 },
-                            ));
+                }
+                PropType::List(ct, it) => {
+                    let rest_are_lists =
+                        (rec.el.props[k..].iter()).all(|q| matches!(q.ty, PropType::List(..)));
+                    match self.source.value(ct) {
+                        Ok(n) => {
+                            tally.found += 1;
+                            self.list(rec, n, it, rec.roles.indices == Some(k), &mut tally)?;
                         }
-                        let n = n as usize;
-                        let is_faces = r.indices == Some(k);
-                        ring.clear();
-                        for _ in 0..n {
-                            let v = reader.value(it).map_err(|e| fail(e, read_values))?;
-                            read_values += 1;
-                            if is_faces {
-                                whole(v, "vertex index")?;
-                                if v < 0.0 || v >= f64::from(u32::MAX) {
-                                    let kind = ProblemKind::IndexOutOfRange {
-                                        index: v as i64,
-                                        count: positions.len() as u64,
-                                    };
-                                    return Err(malformed(path, FMT, at.clone(), kind));
-                                }
-                                ring.push(v as u32);
-                            }
+                        // A line that stops exactly where trailing lists begin: read them as empty.
+                        Err(ValueError::LineEnd) if rest_are_lists => {
+                            self.records.missing_lists += 1;
+                            break;
                         }
-                        if is_faces {
-                            if n < 3 {
-                                return Err(malformed(
-                                    path,
-                                    FMT,
-                                    at.clone(),
-                                    ProblemKind::TooFewCorners { found: n },
-                                ));
-                            }
-                            polys.push(ring.iter().copied());
-                            face_at.push(at.clone());
-                        }
+                        Err(e) => return Err(self.short(rec, e, &tally)),
                     }
                 }
             }
-            extra_lines += u64::from(reader.end_record());
-            if r.xyz.is_some() {
-                positions.push(Point3::new(vals[0], vals[1], vals[2]));
+        }
+        self.records.extra_lines += u64::from(self.source.end_record());
+        if rec.roles.xyz.is_some() {
+            self.records
+                .positions
+                .push(Point3::new(xyz[0], xyz[1], xyz[2]));
+        }
+        Ok(())
+    }
+
+    /// The next scalar of type `t`: `None` (the problem recorded) when it is not of its type.
+    fn scalar(
+        &mut self,
+        rec: &Record,
+        t: Scalar,
+        tally: &mut Tally,
+    ) -> Result<Option<f64>, IoError> {
+        match self.source.value(t) {
+            Ok(v) => {
+                tally.found += 1;
+                Ok(Some(v))
+            }
+            Err(ValueError::Bad(at, kind)) => {
+                tally.found += 1;
+                self.problems.push(at, kind);
+                Ok(None)
+            }
+            Err(e) => Err(self.short(rec, e, tally)),
+        }
+    }
+
+    /// A list of `n` items of type `it` (`n` as read; it must be a count); a face's corners
+    /// when `is_faces`.
+    fn list(
+        &mut self,
+        rec: &Record,
+        n: f64,
+        it: Scalar,
+        is_faces: bool,
+        tally: &mut Tally,
+    ) -> Result<(), IoError> {
+        let (el, index) = (&rec.el.name, rec.index);
+        if let Err(kind) = whole_number(n, "list length", el, index) {
+            return Err(self.fatal(rec.at.clone(), kind));
+        }
+        if n < 0.0 {
+            let kind = ProblemKind::NegativeCount { count: n as i64 };
+            return Err(self.fatal(rec.at.clone(), kind));
+        }
+        let n = n as usize;
+        tally.needed += n;
+        self.ring.clear();
+        let mut usable = true;
+        for _ in 0..n {
+            let v = self.scalar(rec, it, tally)?;
+            if !is_faces {
+                continue;
+            }
+            match v.map(|v| corner(v, el, index, self.records.positions.len())) {
+                Some(Ok(c)) => self.ring.push(c),
+                Some(Err(kind)) => {
+                    self.problems.push(rec.at.clone(), kind);
+                    usable = false;
+                }
+                None => usable = false,
             }
         }
-    }
-    if extra_lines > 0 {
-        warnings.push(format!(
-            "{extra_lines} line(s) hold values beyond the header's properties (ignored)"
-        ));
-    }
-    if missing_lists > 0 {
-        warnings.push(format!("{missing_lists} line(s) end before the header's trailing list properties (read as empty lists)"));
-    }
-    if let Some(extra) = reader.leftover() {
-        warnings.push(extra);
-    }
-    let n = positions.len();
-    let mut problems = Problems::default();
-    for (ring, at) in polys.iter().zip(&face_at) {
-        for &c in ring.iter().filter(|&&c| c as usize >= n) {
-            problems.push(
-                at.clone(),
-                ProblemKind::IndexOutOfRange {
-                    index: i64::from(c),
-                    count: n as u64,
-                },
-            );
+        if is_faces && n < 3 {
+            let kind = ProblemKind::TooFewCorners { found: n };
+            self.problems.push(rec.at.clone(), kind);
+        } else if is_faces && usable {
+            self.records.polys.push(self.ring.iter().copied());
+            self.records.face_at.push(rec.at.clone());
         }
+        Ok(())
     }
-    problems.check(path, FMT)?;
-    super::check_vertex_count(path, n)?;
-    let (faces, stats) = polys.triangulate(&positions, opts.quad_split);
-    let info = ReadInfo {
-        format: match header.encoding {
-            Encoding::Ascii => "ply-ascii",
-            Encoding::Little => "ply-binary-le",
-            Encoding::Big => "ply-binary-be",
+
+    /// The warnings of the records read: lines with values beyond or short of the
+    /// properties, and anything after the last element.
+    fn notes(&mut self) -> Vec<String> {
+        let mut notes = Vec::new();
+        let r = &self.records;
+        if r.extra_lines > 0 {
+            notes.push(format!(
+                "{} line(s) hold values beyond the header's properties (ignored)",
+                r.extra_lines
+            ));
         }
-        .into(),
-        vertices_in_file: positions.len(),
-        polygons: stats,
-        warnings,
-        ..ReadInfo::default()
-    };
-    Ok(ReadOutput {
-        texcoords: None,
-        mesh: TriMesh::new(positions, faces),
-        info,
-    })
+        if r.missing_lists > 0 {
+            notes.push(format!(
+                "{} line(s) end before the header's trailing list properties (read as empty lists)",
+                r.missing_lists
+            ));
+        }
+        notes.extend(self.source.leftover());
+        notes
+    }
+}
+
+/// A face's corner `v`: a whole number within `u32` (whether it names a vertex is checked once
+/// all are read; `vertices` so far are named in the problem).
+fn corner(v: f64, element: &str, index: u64, vertices: usize) -> Result<u32, ProblemKind> {
+    whole_number(v, "vertex index", element, index)?;
+    if v < 0.0 || v >= f64::from(u32::MAX) {
+        return Err(ProblemKind::IndexOutOfRange {
+            index: v as i64,
+            count: vertices as u64,
+        });
+    }
+    Ok(v as u32)
 }
 
 /// A coordinate `v` read as type `t`: finite, and within the range of a `float` (f32) when
@@ -851,6 +988,40 @@ mod tests {
         assert_eq!(r.mesh.faces, vec![[0, 1, 2]]);
         assert_eq!(r.mesh.positions[1], Point3::new(1.0, 0.0, 0.0));
         assert!(r.info.warnings[0].contains("header line 3 skipped"));
+    }
+
+    #[test]
+    fn every_problem_of_the_records_is_listed_and_a_short_line_counts_its_lists() {
+        let head = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nelement face 3\nproperty list uchar int vertex_indices\nend_header\n";
+        let e = read_bytes(
+            format!("{head}0 0 nan\n1 0 x\n0 1e39 0\n0 0 1\n3 0 1 9\n3 0 1.5 2\n2 0 1\n")
+                .as_bytes(),
+        )
+        .unwrap_err()
+        .to_string();
+        let lines: Vec<&str> = e.lines().collect();
+        assert_eq!(
+            lines,
+            [
+                "p.ply: 6 problems in this PLY file:",
+                "p.ply:10: non-finite coordinate NaN",
+                "p.ply:11: 'x' is not a number",
+                "p.ply:12: coordinate 1e39 does not fit the declared type float (at most 3.4028234663852886e38 in magnitude)",
+                "p.ply:15: '1.5' is not a valid int",
+                "p.ply:16: a face needs at least 3 corners, found 2",
+                "p.ply:14: vertex index 9 is out of range: the file has 4 vertices",
+            ],
+            "{e}"
+        );
+        // Reading stops where the records can no longer be counted, with what was found
+        // before: a face line with 2 of its 3 corners needs 4 values.
+        let e = read_bytes(format!("{head}0 0 nan\n1 0 0\n0 1 0\n0 0 1\n3 0 1\n").as_bytes())
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            e,
+            "p.ply: 2 problems in this PLY file:\np.ply:10: non-finite coordinate NaN\np.ply:14: element 'face' 0 has 3 values on its line; its properties need at least 4"
+        );
     }
 
     #[test]
