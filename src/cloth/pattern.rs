@@ -49,7 +49,7 @@ use super::fabric::Fabric;
 use crate::geom::segment_distance;
 use crate::math::{orient2d, Point2, Point3};
 use crate::mesh::polygon::triangulate_with_holes;
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 /// A band edge within 22.5 degrees of a thread (cosine at least this) is a stretch spring; the
 /// others are on the bias, where woven cloth shears (`SpringKind::Shear`).
@@ -566,44 +566,106 @@ pub fn build_with_holes(
     let poly = clean_outline(outline)?;
     let cut = super::holes::check_holes(&poly, holes)?;
     let h = spacing;
-    let (mut x0, mut x1, mut y0, mut y1) = (
-        f64::INFINITY,
-        f64::NEG_INFINITY,
-        f64::INFINITY,
-        f64::NEG_INFINITY,
-    );
-    for p in &poly {
-        x0 = x0.min(p.x);
-        x1 = x1.max(p.x);
-        y0 = y0.min(p.y);
-        y1 = y1.max(p.y);
+    let grid = Grid::over(&poly, h)?;
+    let full = full_cells(&grid, &poly, &cut);
+    let (lattice, mut flat) = Lattice::of(grid, full);
+    let grid_particles = flat.len();
+    let outer = sample_loop(&poly, h, &mut flat);
+    let cut_loops = sample_holes(&cut, h, &mut flat);
+    let mut triangles = lattice.cell_triangles();
+    let mut band_holes = block_boundaries(&flat, &triangles);
+    band_holes.extend(cut_loops);
+    let band = band_triangles(&flat, &outer, band_holes, h)?;
+    triangles.extend_from_slice(&band);
+    let (mass, area) = masses(&flat, &triangles, fabric.density);
+    massless(&flat, &mass)?;
+    let (mut springs, mut paired) = lattice.grid_springs(&flat, fabric);
+    band_springs(&flat, &band, fabric, &mut springs, &mut paired);
+    let (i0, j0) = (lattice.grid.i0, lattice.grid.j0);
+    let bends = bend_elements(&flat, &triangles, grid_particles, fabric, h, |i, j| {
+        lattice.particle(i - i0, j - j0)
+    });
+    let pinned = pinned_particles(&flat, pins, h)?;
+    Ok(Piece {
+        flat,
+        triangles,
+        springs,
+        bends,
+        mass,
+        pinned,
+        area,
+        grid_particles,
+        outline_particles: outer,
+    })
+}
+
+/// The square grid of spacing `h` over the outline's box: `ni` by `nj` crossings, crossing
+/// `(i, j)` at `((i0 + i) h, (j0 + j) h)`.
+struct Grid {
+    i0: i64,
+    j0: i64,
+    ni: usize,
+    nj: usize,
+    h: f64,
+}
+
+impl Grid {
+    /// The grid over the box of `poly`, refused (`PatternError::TooFine`) past 4,000,000
+    /// crossings.
+    fn over(poly: &[Point2], h: f64) -> Result<Grid, PatternError> {
+        let (mut x0, mut x1, mut y0, mut y1) = (
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        );
+        for p in poly {
+            x0 = x0.min(p.x);
+            x1 = x1.max(p.x);
+            y0 = y0.min(p.y);
+            y1 = y1.max(p.y);
+        }
+        let (i0, i1) = ((x0 / h).floor() as i64, (x1 / h).ceil() as i64);
+        let (j0, j1) = ((y0 / h).floor() as i64, (y1 / h).ceil() as i64);
+        let (ni, nj) = ((i1 - i0 + 1) as usize, (j1 - j0 + 1) as usize);
+        if ni.saturating_mul(nj) > 4_000_000 {
+            return Err(PatternError::TooFine {
+                spacing: h,
+                count: ni.saturating_mul(nj),
+            });
+        }
+        Ok(Grid { i0, j0, ni, nj, h })
     }
-    let (i0, i1) = ((x0 / h).floor() as i64, (x1 / h).ceil() as i64);
-    let (j0, j1) = ((y0 / h).floor() as i64, (y1 / h).ceil() as i64);
-    let (ni, nj) = ((i1 - i0 + 1) as usize, (j1 - j0 + 1) as usize);
-    if ni.saturating_mul(nj) > 4_000_000 {
-        return Err(PatternError::TooFine {
-            spacing,
-            count: ni.saturating_mul(nj),
-        });
+
+    /// The crossing `(i, j)` in the plane.
+    fn node(&self, i: usize, j: usize) -> Point2 {
+        Point2::new(
+            (self.i0 + i as i64) as f64 * self.h,
+            (self.j0 + j as i64) as f64 * self.h,
+        )
     }
-    let node =
-        |i: usize, j: usize| Point2::new((i0 + i as i64) as f64 * h, (j0 + j as i64) as f64 * h);
+}
+
+/// The full cells of `grid` (row after row), parted where they touch at a corner only: cells
+/// whose four corners are inside `poly`, out of the holes `cut`, at least [`CLEARANCE`]` * h`
+/// from every loop, and whose square no loop's edge meets.
+fn full_cells(grid: &Grid, poly: &[Point2], cut: &[Vec<Point2>]) -> Vec<bool> {
+    let (ni, nj, h) = (grid.ni, grid.nj, grid.h);
     let valid: Vec<bool> = (0..nj)
         .flat_map(|j| (0..ni).map(move |i| (i, j)))
         .map(|(i, j)| {
-            let q = node(i, j);
-            inside(&poly, &q)
-                && distance_to_outline(&poly, &q) >= CLEARANCE * h
-                && !super::holes::in_any(&cut, &q)
+            let q = grid.node(i, j);
+            inside(poly, &q)
+                && distance_to_outline(poly, &q) >= CLEARANCE * h
+                && !super::holes::in_any(cut, &q)
                 && cut
                     .iter()
                     .all(|c| distance_to_outline(c, &q) >= CLEARANCE * h)
         })
         .collect();
-    let mut loops: Vec<&[Point2]> = vec![&poly];
+    let mut loops: Vec<&[Point2]> = vec![poly];
     loops.extend(cut.iter().map(|c| c.as_slice()));
-    let crossed = crossed_cells(&loops, &node, h, ni, nj);
+    let crossed = crossed_cells(&loops, &|i, j| grid.node(i, j), h, ni, nj);
     let mut full_cells: Vec<bool> = (0..nj)
         .flat_map(|j| (0..ni).map(move |i| (i, j)))
         .map(|(i, j)| {
@@ -617,58 +679,146 @@ pub fn build_with_holes(
         })
         .collect();
     unpinch(&mut full_cells, ni, nj);
-    let full = |i: usize, j: usize| full_cells[j * ni + i];
-    let mut kept = vec![false; ni * nj];
-    for j in 0..nj {
-        for i in 0..ni {
-            if full(i, j) {
-                for (a, b) in [(i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1)] {
-                    kept[b * ni + a] = true;
+    full_cells
+}
+
+/// The grid with its full cells and the particle at each crossing (`u32::MAX` where none).
+struct Lattice {
+    grid: Grid,
+    full: Vec<bool>,
+    index: Vec<u32>,
+}
+
+impl Lattice {
+    /// The corners of the `full` cells of `grid` as particles, row after row: the lattice and
+    /// their positions.
+    fn of(grid: Grid, full: Vec<bool>) -> (Lattice, Vec<Point2>) {
+        let (ni, nj) = (grid.ni, grid.nj);
+        let mut kept = vec![false; ni * nj];
+        for j in 0..nj {
+            for i in 0..ni {
+                if full[j * ni + i] {
+                    for (a, b) in [(i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1)] {
+                        kept[b * ni + a] = true;
+                    }
                 }
             }
         }
-    }
-    // Particles: kept grid nodes (row after row), then the outline samples.
-    let mut index = vec![u32::MAX; ni * nj];
-    let mut flat: Vec<Point2> = Vec::new();
-    for j in 0..nj {
-        for i in 0..ni {
-            if kept[j * ni + i] {
-                index[j * ni + i] = flat.len() as u32;
-                flat.push(node(i, j));
+        let mut index = vec![u32::MAX; ni * nj];
+        let mut flat: Vec<Point2> = Vec::new();
+        for j in 0..nj {
+            for i in 0..ni {
+                if kept[j * ni + i] {
+                    index[j * ni + i] = flat.len() as u32;
+                    flat.push(grid.node(i, j));
+                }
             }
         }
+        (Lattice { grid, full, index }, flat)
     }
-    let grid_particles = flat.len();
-    let outer = sample_loop(&poly, h, &mut flat);
-    // The holes' edges, clockwise: holes of the band, like the blocks of full cells.
-    let cut_loops: Vec<Vec<u32>> = cut
-        .iter()
+
+    /// Whether cell `(i, j)` is full.
+    fn full(&self, i: usize, j: usize) -> bool {
+        self.full[j * self.grid.ni + i]
+    }
+
+    /// The particle at crossing `(i, j)`, or `u32::MAX`.
+    fn id(&self, i: usize, j: usize) -> u32 {
+        self.index[j * self.grid.ni + i]
+    }
+
+    /// The particle at crossing `(i, j)`, or `u32::MAX` there and off the grid.
+    fn particle(&self, i: i64, j: i64) -> u32 {
+        if i < 0 || j < 0 || i >= self.grid.ni as i64 || j >= self.grid.nj as i64 {
+            u32::MAX
+        } else {
+            self.id(i as usize, j as usize)
+        }
+    }
+
+    /// Two triangles per full cell, row after row, counter-clockwise: `[a, b, c]` and
+    /// `[a, c, d]` for the cell's corners `a, b, c, d` counter-clockwise from its lower left.
+    fn cell_triangles(&self) -> Vec<[u32; 3]> {
+        let mut triangles: Vec<[u32; 3]> = Vec::new();
+        for j in 0..self.grid.nj {
+            for i in 0..self.grid.ni {
+                if self.full(i, j) {
+                    let (a, b, c, d) = (
+                        self.id(i, j),
+                        self.id(i + 1, j),
+                        self.id(i + 1, j + 1),
+                        self.id(i, j + 1),
+                    );
+                    triangles.push([a, b, c]);
+                    triangles.push([a, c, d]);
+                }
+            }
+        }
+        triangles
+    }
+
+    /// The grid's springs, particle after particle (row after row): stretch springs to the
+    /// next particle along warp and weft, shear springs on the diagonals of full cells. With
+    /// them the particle pairs they join, smaller index first.
+    fn grid_springs(&self, flat: &[Point2], fabric: &Fabric) -> (Vec<Spring>, HashSet<(u32, u32)>) {
+        let (ni, nj) = (self.grid.ni, self.grid.nj);
+        let mut springs: Vec<Spring> = Vec::new();
+        let mut paired: HashSet<(u32, u32)> = HashSet::new();
+        for j in 0..nj {
+            for i in 0..ni {
+                let a = self.id(i, j);
+                if a == u32::MAX {
+                    continue;
+                }
+                let at = |di: i64, dj: i64| self.particle(i as i64 + di, j as i64 + dj);
+                for (di, dj, kind) in [(1, 0, 0), (0, 1, 1)] {
+                    let b = at(di, dj);
+                    if b != u32::MAX {
+                        let k = fabric.stretch[kind];
+                        add_spring(&mut springs, flat, a, b, k, SpringKind::Stretch);
+                        paired.insert((a.min(b), a.max(b)));
+                    }
+                }
+                for (di, dj) in [(1, 1), (-1, 1)] {
+                    let b = at(di, dj);
+                    // A diagonal of a full cell.
+                    let cell_full = if di == 1 {
+                        self.full(i, j)
+                    } else {
+                        i >= 1 && self.full(i - 1, j)
+                    };
+                    if b != u32::MAX && cell_full {
+                        add_spring(&mut springs, flat, a, b, fabric.shear, SpringKind::Shear);
+                        paired.insert((a.min(b), a.max(b)));
+                    }
+                }
+            }
+        }
+        (springs, paired)
+    }
+}
+
+/// Samples each hole of `cut` clockwise into `flat` (`sample_loop`): holes of the band, like
+/// the blocks of full cells.
+fn sample_holes(cut: &[Vec<Point2>], h: f64, flat: &mut Vec<Point2>) -> Vec<Vec<u32>> {
+    cut.iter()
         .map(|c| {
             let mut cw = c.clone();
             cw.reverse();
-            sample_loop(&cw, h, &mut flat)
+            sample_loop(&cw, h, flat)
         })
-        .collect();
-    let id = |i: usize, j: usize| index[j * ni + i];
-    // Triangles of full cells.
-    let mut triangles: Vec<[u32; 3]> = Vec::new();
-    for j in 0..nj {
-        for i in 0..ni {
-            if full(i, j) {
-                let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
-                triangles.push([a, b, c]);
-                triangles.push([a, c, d]);
-            }
-        }
-    }
-    let cell_triangles = triangles.len();
-    // Boundary loops of the blocks of full cells: directed cell edges whose reverse is absent.
+        .collect()
+}
+
+/// The boundary loops of the blocks of full cells, clockwise: the directed cell edges of
+/// `cell_triangles` (two per cell) whose reverse is absent, chained. Where two blocks touch at
+/// a corner a loop turns most to the left (stays with its block).
+fn block_boundaries(flat: &[Point2], cell_triangles: &[[u32; 3]]) -> Vec<Vec<u32>> {
     let mut out_edges: HashMap<u32, Vec<u32>> = HashMap::new();
-    let mut directed: std::collections::HashSet<(u32, u32)> = std::collections::HashSet::new();
-    for t in 0..cell_triangles / 2 {
-        let [a, b, c] = triangles[2 * t];
-        let d = triangles[2 * t + 1][2];
+    let mut directed: HashSet<(u32, u32)> = HashSet::new();
+    for t in 0..cell_triangles.len() / 2 {
+        let [a, b, c] = cell_triangles[2 * t];
+        let d = cell_triangles[2 * t + 1][2];
         for e in [(a, b), (b, c), (c, d), (d, a)] {
             directed.insert(e);
         }
@@ -682,8 +832,8 @@ pub fn build_with_holes(
     for &(a, b) in &boundary {
         out_edges.entry(a).or_default().push(b);
     }
-    let mut used: std::collections::HashSet<(u32, u32)> = std::collections::HashSet::new();
-    let mut holes: Vec<Vec<u32>> = Vec::new();
+    let mut used: HashSet<(u32, u32)> = HashSet::new();
+    let mut loops: Vec<Vec<u32>> = Vec::new();
     for &(a0, b0) in &boundary {
         if used.contains(&(a0, b0)) {
             continue;
@@ -718,21 +868,35 @@ pub fn build_with_holes(
             }
         }
         lp.reverse();
-        holes.push(lp);
+        loops.push(lp);
     }
-    holes.extend(cut_loops);
-    let (mut band, positions) = (Vec::new(), pos3(&flat));
-    for (ring, inner) in band_regions(&flat, outer.clone(), holes) {
+    loops
+}
+
+/// The band's triangles: each region of the band (`band_regions`: the outline's samples
+/// `outer` with the clockwise loops `holes`) ear-clipped, then chords longer than [`CHORD`]
+/// spacings flipped towards Delaunay; a triangle turned over is refused (`turned_over`).
+fn band_triangles(
+    flat: &[Point2],
+    outer: &[u32],
+    holes: Vec<Vec<u32>>,
+    h: f64,
+) -> Result<Vec<[u32; 3]>, PatternError> {
+    let (mut band, positions) = (Vec::new(), pos3(flat));
+    for (ring, inner) in band_regions(flat, outer.to_vec(), holes) {
         band.extend(triangulate_with_holes(&positions, &ring, &inner));
     }
-    crate::mesh::delaunay::flip_to_delaunay(&flat, &mut band, CHORD * h);
-    turned_over(&flat, &band, h)?;
-    triangles.extend_from_slice(&band);
+    crate::mesh::delaunay::flip_to_delaunay(flat, &mut band, CHORD * h);
+    turned_over(flat, &band, h)?;
+    Ok(band)
+}
 
-    // Masses.
+/// Particle masses (a third of each incident triangle's area times `density`) and the piece's
+/// area, summed triangle after triangle.
+fn masses(flat: &[Point2], triangles: &[[u32; 3]], density: f64) -> (Vec<f64>, f64) {
     let mut mass = vec![0.0; flat.len()];
     let mut area = 0.0;
-    for t in &triangles {
+    for t in triangles {
         let a = 0.5
             * orient2d(
                 &flat[t[0] as usize],
@@ -741,71 +905,45 @@ pub fn build_with_holes(
             );
         area += a;
         for &v in t {
-            mass[v as usize] += fabric.density * a / 3.0;
+            mass[v as usize] += density * a / 3.0;
         }
     }
-    massless(&flat, &mass)?;
+    (mass, area)
+}
 
-    // Springs.
-    let mut springs: Vec<Spring> = Vec::new();
-    let mut paired: std::collections::HashSet<(u32, u32)> = std::collections::HashSet::new();
-    let add = |springs: &mut Vec<Spring>, a: u32, b: u32, k: f64, kind: SpringKind| {
-        if k > 0.0 {
-            let rest = (flat[a as usize] - flat[b as usize]).norm();
-            springs.push(Spring {
-                a,
-                b,
-                rest,
-                k,
-                kind,
-            });
-        }
-    };
-    for j in 0..nj {
-        for i in 0..ni {
-            let a = id(i, j);
-            if a == u32::MAX {
-                continue;
-            }
-            let at = |di: i64, dj: i64| -> u32 {
-                let (ii, jj) = (i as i64 + di, j as i64 + dj);
-                if ii < 0 || jj < 0 || ii >= ni as i64 || jj >= nj as i64 {
-                    u32::MAX
-                } else {
-                    id(ii as usize, jj as usize)
-                }
-            };
-            for (di, dj, kind) in [(1, 0, 0), (0, 1, 1)] {
-                let b = at(di, dj);
-                if b != u32::MAX {
-                    add(
-                        &mut springs,
-                        a,
-                        b,
-                        fabric.stretch[kind],
-                        SpringKind::Stretch,
-                    );
-                    paired.insert((a.min(b), a.max(b)));
-                }
-            }
-            for (di, dj) in [(1, 1), (-1, 1)] {
-                let b = at(di, dj);
-                // A diagonal of a full cell.
-                let cell_full = if di == 1 {
-                    full(i, j)
-                } else {
-                    i >= 1 && full(i - 1, j)
-                };
-                if b != u32::MAX && cell_full {
-                    add(&mut springs, a, b, fabric.shear, SpringKind::Shear);
-                    paired.insert((a.min(b), a.max(b)));
-                }
-            }
-        }
+/// Appends a spring of constant `k` from `a` to `b` at its length in `flat`, if `k > 0`.
+fn add_spring(
+    springs: &mut Vec<Spring>,
+    flat: &[Point2],
+    a: u32,
+    b: u32,
+    k: f64,
+    kind: SpringKind,
+) {
+    if k > 0.0 {
+        let rest = (flat[a as usize] - flat[b as usize]).norm();
+        springs.push(Spring {
+            a,
+            b,
+            rest,
+            k,
+            kind,
+        });
     }
-    // The band: a spring along every new edge.
+}
+
+/// A spring along every edge of the `band` not in `paired` (each edge once, in index order):
+/// `E(theta) A / l^2`, a stretch spring within 22.5 degrees of a thread, else a shear spring
+/// (see the module notes). The edges are added to `paired`.
+fn band_springs(
+    flat: &[Point2],
+    band: &[[u32; 3]],
+    fabric: &Fabric,
+    springs: &mut Vec<Spring>,
+    paired: &mut HashSet<(u32, u32)>,
+) {
     let mut opposite: HashMap<(u32, u32), Vec<u32>> = HashMap::new();
-    for t in &band {
+    for t in band {
         for e in 0..3 {
             let (a, b, c) = (t[e], t[(e + 1) % 3], t[(e + 2) % 3]);
             opposite.entry((a.min(b), a.max(b))).or_default().push(c);
@@ -825,8 +963,9 @@ pub fn build_with_holes(
                 .sum();
             // Near a thread (within 22.5 degrees) it stretches the thread; else it shears.
             let along = d.x.abs().max(d.y.abs()) / l >= BAND_THREAD_COS;
-            add(
-                &mut springs,
+            add_spring(
+                springs,
+                flat,
                 a,
                 b,
                 fabric.directional_stretch(d.x / l, d.y / l) * tributary / (l * l),
@@ -839,16 +978,12 @@ pub fn build_with_holes(
             paired.insert((a, b));
         }
     }
+}
 
-    let bends = bend_elements(&flat, &triangles, grid_particles, fabric, h, |i, j| {
-        let (i, j) = (i - i0, j - j0);
-        if i < 0 || j < 0 || i >= ni as i64 || j >= nj as i64 {
-            u32::MAX
-        } else {
-            id(i as usize, j as usize)
-        }
-    });
-
+/// The pinned particles, sorted and once each: for each point of `pins` the nearest particle
+/// (refused, `PatternError::Pin`, farther than `h / 2`) and those within its radius; for each
+/// segment the particles within `h / 1000` of it (refused, `PatternError::PinSegment`, if none).
+fn pinned_particles(flat: &[Point2], pins: &Pins, h: f64) -> Result<Vec<u32>, PatternError> {
     let mut pinned = Vec::new();
     for (pi, pin) in pins.points.iter().enumerate() {
         let (best, dist) = flat
@@ -891,17 +1026,7 @@ pub fn build_with_holes(
     }
     pinned.sort_unstable();
     pinned.dedup();
-    Ok(Piece {
-        flat,
-        triangles,
-        springs,
-        bends,
-        mass,
-        pinned,
-        area,
-        grid_particles,
-        outline_particles: outer,
-    })
+    Ok(pinned)
 }
 
 #[cfg(test)]
