@@ -324,6 +324,27 @@ fn hostile_placement_at_1e308_is_refused_naming_the_key_and_the_rounding() {
     assert!(zs.iter().all(|z| (z - 9.0e7).abs() < 1.0), "{:?}", &zs[..3]);
 }
 
+#[test]
+fn hostile_large_piece_far_out_is_refused_by_its_thickness() {
+    // 80 Gm on a side at 2 Gm spacing: the spacing is resolved 1e12 m out, but coordinates
+    // there are 2.2e-4 m apart, a tenth of the fabric's thickness (2 mm here).
+    drape_refused(
+        &[
+            (
+                "outline = [[-0.4, -0.4], [0.4, -0.4], [0.4, 0.4], [-0.4, 0.4]]",
+                "outline = [[-4e10, -4e10], [4e10, -4e10], [4e10, 4e10], [-4e10, 4e10]]",
+            ),
+            ("spacing = 0.02", "spacing = 2e9"),
+            ("position = [0.0, 0.0, 0.33]", "position = [0.0, 0.0, 1e12]"),
+        ],
+        &[
+            "key 'piece[1].position': reaches 1.000e12 m from the origin",
+            "more than a thousandth of the fabric's thickness (0.002 m)",
+            "place it within 9.007e9 m of the origin",
+        ],
+    );
+}
+
 fn fit_refused(extra: &[&str], parts: &[&str]) {
     let d = tempfile::tempdir().unwrap();
     let out = d.path().join("x.obj");

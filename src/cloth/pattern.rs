@@ -67,6 +67,10 @@ pub const CLEARANCE: f64 = 0.4;
 /// takes seconds and about a gigabyte, and each step of the run costs as much again.
 pub const MAX_PARTICLES: usize = 1_000_000;
 
+/// The farthest an outline point may be from the origin, m: beyond, a cell's area, a
+/// squared distance or an edge's length (`|b - a|` of two points 2e154 apart) overflows.
+pub const MAX_REACH: f64 = 1e100;
+
 pub use super::elements::{Bend, Spring, SpringKind};
 
 /// Cotangent weights above this mark a sliver triangle; its node gets no bending element.
@@ -216,6 +220,9 @@ pub enum PatternError {
     /// A bad spacing.
     #[error("spacing {spacing} must be a positive number")]
     Spacing { spacing: f64 },
+    /// An outline too far from the origin for the cloth's arithmetic.
+    #[error("the outline reaches {} m from the origin; at most {} m (beyond, squared lengths and areas leave the range of an f64)", crate::math::short(*reach), crate::math::short(*limit))]
+    TooFar { reach: f64, limit: f64 },
     /// Too many particles, estimated from the outline's area before the grid is built.
     #[error("spacing {spacing} m over an outline of {area:.4e} m^2 gives about {estimate} particles; at most {limit}: use a larger spacing")]
     TooManyParticles {
@@ -526,12 +533,21 @@ pub fn build(
     build_with_holes(outline, &[], spacing, fabric, pins)
 }
 
-/// Refuses a spacing that is not a positive number, or that would give more than
-/// [`MAX_PARTICLES`] particles: the outline's area over `spacing^2` plus its perimeter over
-/// `spacing` (holes not subtracted), computed before anything is built.
+/// Refuses a spacing that is not a positive number, an outline reaching beyond
+/// [`MAX_REACH`], or a spacing that would give more than [`MAX_PARTICLES`] particles: the
+/// outline's area over `spacing^2` plus its perimeter over `spacing` (holes not subtracted),
+/// computed before anything is built.
 pub fn check_particle_count(outline: &[Point2], spacing: f64) -> Result<(), PatternError> {
     if !(spacing.is_finite() && spacing > 0.0) {
         return Err(PatternError::Spacing { spacing });
+    }
+    let reach = (outline.iter())
+        .map(|p| p.x.abs().max(p.y.abs()))
+        .filter(|r| r.is_finite())
+        .fold(0.0, f64::max);
+    if reach > MAX_REACH {
+        let limit = MAX_REACH;
+        return Err(PatternError::TooFar { reach, limit });
     }
     let n = outline.len();
     let (mut twice_area, mut perimeter) = (0.0, 0.0);
@@ -1505,6 +1521,40 @@ mod tests {
             ),
             Err(PatternError::Pin { .. })
         ));
+    }
+
+    #[test]
+    fn a_piece_beyond_the_reach_limit_is_refused_before_it_is_built() {
+        // 1e300 m on a side at 1e298 m spacing is 40,000 particles, but every edge's length
+        // overflowed (sampling it then never ended) and every cell's area was infinite.
+        let square = |r: f64| {
+            vec![
+                Point2::new(-r, -r),
+                Point2::new(r, -r),
+                Point2::new(r, r),
+                Point2::new(-r, r),
+            ]
+        };
+        match build(&square(1e300), 1e298, &Fabric::cotton(), &Pins::default()) {
+            Err(PatternError::TooFar { reach, limit }) => {
+                assert_eq!((reach, limit), (1e300, MAX_REACH))
+            }
+            other => panic!("{:?}", other.map(|p| p.flat.len())),
+        }
+        // At the limit it builds, with finite masses adding up to the fabric's mass.
+        let piece = build(
+            &square(MAX_REACH),
+            MAX_REACH / 8.0,
+            &Fabric::cotton(),
+            &Pins::default(),
+        )
+        .unwrap();
+        let total: f64 = piece.mass.iter().sum();
+        let expected = Fabric::cotton().density * 4.0 * MAX_REACH * MAX_REACH;
+        assert!(
+            (total / expected - 1.0).abs() < 1e-12,
+            "{total:e} against {expected:e}"
+        );
     }
 
     #[test]

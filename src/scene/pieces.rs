@@ -3,7 +3,7 @@
 
 use super::{
     fabric_named, unknown_preset, FabricFile, File, PieceFile, PieceSpec, Problems, SeamFile,
-    SeamSide, SeamSideFile, SeamSpec, COORDINATE_RESOLUTION,
+    SeamSide, SeamSideFile, SeamSpec, COORDINATE_RESOLUTION, THICKNESS_RESOLUTION,
 };
 use crate::cloth::fabric::{Fabric, Kes};
 use crate::cloth::pattern::{self, Pins};
@@ -146,8 +146,9 @@ fn piece(
         .map(|v| v.abs())
         .fold(0.0, f64::max)
         * to_m;
-    if let Some(m) = too_far(reach, spacing) {
-        p.bad(&k("position"), m);
+    let far = too_far(reach, spacing, fabric.thickness);
+    if let Some(m) = &far {
+        p.bad(&k("position"), m.clone());
     }
     let rotation = pf.rotation.unwrap_or([0.0; 3]);
     p.finite(&k("rotation"), &rotation);
@@ -158,7 +159,12 @@ fn piece(
             format!("a polygon needs at least 3 points, got {}", outline.len()),
         );
     } else if let Err(e) = pattern::check_particle_count(&outline, spacing) {
-        p.bad(&k("spacing"), e.to_string());
+        match e {
+            // Said already, under `position`.
+            pattern::PatternError::TooFar { .. } if far.is_some() => {}
+            pattern::PatternError::TooFar { .. } => p.bad(&k("outline"), e.to_string()),
+            e => p.bad(&k("spacing"), e.to_string()),
+        }
     }
     let holes = pf.holes.iter().map(|h| points(h, to_m)).collect();
     let pins = pins(&at, pf, to_m, p);
@@ -233,18 +239,35 @@ fn piece_name(i: usize, at: &str, pf: &PieceFile, p: &Problems) -> String {
     name
 }
 
-/// Why a piece of `spacing` reaching `reach` m from the origin (its position plus its
-/// outline) is too far: there, neighbouring f64 numbers are more than
-/// [`COORDINATE_RESOLUTION`] of the spacing apart, and the cloth's shape is lost to rounding.
-fn too_far(reach: f64, spacing: f64) -> Option<String> {
+/// Why a piece of `spacing` and fabric `thickness` reaching `reach` m from the origin (its
+/// position plus its outline) is too far: there, neighbouring f64 numbers are more than
+/// [`COORDINATE_RESOLUTION`] of the spacing apart (the cloth's shape is lost to rounding), or
+/// more than [`THICKNESS_RESOLUTION`] of the thickness (so are its contacts, and a step's fall
+/// under gravity, about a millimetre).
+fn too_far(reach: f64, spacing: f64, thickness: f64) -> Option<String> {
     let gap = reach * f64::EPSILON;
-    (gap.is_finite() && gap > COORDINATE_RESOLUTION * spacing).then(|| {
+    let by_thickness = THICKNESS_RESOLUTION * thickness;
+    let (what, length, least) = if thickness > 0.0 && by_thickness < COORDINATE_RESOLUTION * spacing
+    {
+        (
+            "a thousandth of the fabric's thickness",
+            thickness,
+            by_thickness,
+        )
+    } else {
+        (
+            "a millionth of the spacing",
+            spacing,
+            COORDINATE_RESOLUTION * spacing,
+        )
+    };
+    (gap.is_finite() && gap > least).then(|| {
         format!(
-            "reaches {} m from the origin, where coordinates are {} m apart: more than a millionth of the spacing ({} m), so rounding would break the cloth; place it within {} m of the origin",
+            "reaches {} m from the origin, where coordinates are {} m apart: more than {what} ({} m), so rounding would break the cloth; place it within {} m of the origin",
             short(reach),
             short(gap),
-            short(spacing),
-            short(COORDINATE_RESOLUTION * spacing / f64::EPSILON)
+            short(length),
+            short(least / f64::EPSILON)
         )
     })
 }
