@@ -697,8 +697,9 @@ impl Problems {
 /// The file's `units` (m, cm or mm; default m).
 fn units(units: Option<&str>, p: &Problems) -> Units {
     match units {
-        None => Units::M,
-        Some(u @ ("m" | "cm" | "mm")) => u.parse().unwrap(),
+        None | Some("m") => Units::M,
+        Some("cm") => Units::Cm,
+        Some("mm") => Units::Mm,
         Some(u) => {
             p.bad("units", format!("unknown unit '{u}': expected m, cm or mm"));
             Units::M
