@@ -548,13 +548,24 @@ impl ClothHash {
         self.positions = checksum(x);
         self.big.clear();
         self.entries.clear();
+        if !self.frame(x, cell, margin.max(reach)) {
+            return;
+        }
+        self.triangle_boxes(x, triangles, margin, contact);
+        self.count_slots();
+        self.fill_slots();
+    }
+
+    /// The hashed region round the positions `x`: its origin and cube edge (at least `cell`,
+    /// and no more than `MAX_CUBES_AXIS` cubes along an axis), `pad` (m) added round the box;
+    /// false (an empty table) when there are no positions.
+    fn frame(&mut self, x: &[Point3], cell: f64, pad: f64) -> bool {
         let Some(bbox) = Aabb::of_points(x) else {
             self.mask = 0;
             self.start.clear();
             self.start.resize(2, 0);
-            return;
+            return false;
         };
-        let pad = margin.max(reach);
         let extent = bbox.size().max() + 2.0 * (pad + cell);
         let cell = cell.max(extent / MAX_CUBES_AXIS);
         self.cell = cell;
@@ -564,123 +575,50 @@ impl ClothHash {
             m.max(bbox.min[ax].abs()).max(bbox.max[ax].abs())
         });
         self.plane_tol = PLANE_TOL_REL * (scale + extent);
+        true
+    }
+
+    /// Each triangle's plane, slabs (for contacts), range of cubes and `f32` box, in parallel
+    /// over fixed chunks ([`triangle_box`]).
+    fn triangle_boxes(
+        &mut self,
+        x: &[Point3],
+        triangles: &[[u32; 3]],
+        margin: f64,
+        contact: Option<f64>,
+    ) {
         let nt = triangles.len();
         self.span.resize(nt, [0; 6]);
         self.boxes.resize(nt, [0.0; 6]);
         self.planes.resize(nt, [0.0; 4]);
         self.slabs.resize(nt, [[0.0; 4]; 3]);
-        {
-            let (origin, inv) = (self.origin, self.inv_cell);
-            let (span, boxes) = (&mut self.span, &mut self.boxes);
-            let (planes, slabs) = (&mut self.planes, &mut self.slabs);
-            // One pass per triangle: plane, slabs (for contacts), cube range and f32 box.
-            let one =
-                |t: usize, pl: &mut Plane, sl: &mut Slabs, sp: &mut [u32; 6], bx: &mut [f32; 6]| {
-                    let c = triangles[t].map(|v| x[v as usize]);
-                    let (e0, e1) = (c[1] - c[0], c[2] - c[0]);
-                    let n = e0.cross(&e1);
-                    let l = n.norm();
-                    let ok = l > 0.0 && l.is_finite();
-                    let n = if ok { n / l } else { Vec3::zeros() };
-                    *pl = [n.x, n.y, n.z, n.dot(&c[0].coords)];
-                    let (mut lo, mut hi) = ([c[0].x, c[0].y, c[0].z], [c[0].x, c[0].y, c[0].z]);
-                    let widen = |lo: &mut [f64; 3], hi: &mut [f64; 3], q: &Point3| {
-                        for ax in 0..3 {
-                            lo[ax] = lo[ax].min(q[ax]);
-                            hi[ax] = hi[ax].max(q[ax]);
-                        }
-                    };
-                    widen(&mut lo, &mut hi, &c[1]);
-                    widen(&mut lo, &mut hi, &c[2]);
-                    let mut everywhere = false;
-                    match contact {
-                        None => {
-                            for ax in 0..3 {
-                                lo[ax] -= margin;
-                                hi[ax] += margin;
-                            }
-                        }
-                        Some(reach) if ok => {
-                            // Inward edge normals: n x e has the length of e.
-                            let edges = [e0, c[2] - c[1], -e1];
-                            let mut m = [Vec3::zeros(); 3];
-                            for k in 0..3 {
-                                m[k] = n.cross(&edges[k]) / edges[k].norm();
-                                sl[k] = [m[k].x, m[k].y, m[k].z, m[k].dot(&c[k].coords)];
-                            }
-                            // Corner k joins edge k - 1 and edge k; with both lines moved out by
-                            // `margin` it moves by -margin (m1 + m2) / (1 + m1 . m2) (mitred).
-                            for k in 0..3 {
-                                let (m1, m2) = (m[(k + 2) % 3], m[k]);
-                                let den = 1.0 + m1.dot(&m2);
-                                if den.is_nan() || den <= 1e-9 {
-                                    everywhere = true;
-                                    break;
-                                }
-                                let q = c[k] - (m1 + m2) * (margin / den);
-                                widen(&mut lo, &mut hi, &q);
-                            }
-                            for ax in 0..3 {
-                                let g = reach * n[ax].abs();
-                                lo[ax] -= g;
-                                hi[ax] += g;
-                            }
-                        }
-                        // Degenerate: never a pair, but listed everywhere rather than nowhere.
-                        Some(_) => everywhere = true,
-                    }
-                    if everywhere {
-                        let top = MAX_CUBES_AXIS as u32;
-                        *sp = [0, 0, 0, top, top, top];
-                        *bx = [
-                            f32::NEG_INFINITY,
-                            f32::NEG_INFINITY,
-                            f32::NEG_INFINITY,
-                            f32::INFINITY,
-                            f32::INFINITY,
-                            f32::INFINITY,
-                        ];
-                        return;
-                    }
-                    for ax in 0..3 {
-                        // Non-negative by the origin's choice: truncation is floor (a mitred corner
-                        // may reach below it: clamped, no point is there).
-                        let (a, b) = ((lo[ax] - origin[ax]) * inv, (hi[ax] - origin[ax]) * inv);
-                        sp[ax] = if a > 0.0 { a as u32 } else { 0 };
-                        sp[ax + 3] = if b > MAX_CUBES_AXIS {
-                            MAX_CUBES_AXIS as u32
-                        } else if b > 0.0 {
-                            b as u32
-                        } else {
-                            0
-                        };
-                        bx[ax] = round32(lo[ax], false);
-                        bx[ax + 3] = round32(hi[ax], true);
-                    }
-                };
-            let mut parts: Vec<BuildChunk> = planes
-                .chunks_mut(CHUNK)
-                .zip(slabs.chunks_mut(CHUNK))
-                .zip(span.chunks_mut(CHUNK))
-                .zip(boxes.chunks_mut(CHUNK))
-                .collect();
-            par::for_each_mut(&mut parts, par::parallel(nt), |k, (((pl, sl), sp), bx)| {
-                for j in 0..pl.len() {
-                    one(
-                        k * CHUNK + j,
-                        &mut pl[j],
-                        &mut sl[j],
-                        &mut sp[j],
-                        &mut bx[j],
-                    );
-                }
-            });
-        }
-        let size = (2 * nt).max(16).next_power_of_two();
+        let grid = Grid {
+            origin: self.origin,
+            inv_cell: self.inv_cell,
+            margin,
+            contact,
+        };
+        let mut parts: Vec<BuildChunk> = (self.planes.chunks_mut(CHUNK))
+            .zip(self.slabs.chunks_mut(CHUNK))
+            .zip(self.span.chunks_mut(CHUNK))
+            .zip(self.boxes.chunks_mut(CHUNK))
+            .collect();
+        par::for_each_mut(&mut parts, par::parallel(nt), |k, (((pl, sl), sp), bx)| {
+            for j in 0..pl.len() {
+                let c = triangles[k * CHUNK + j].map(|v| x[v as usize]);
+                triangle_box(&c, &grid, &mut pl[j], &mut sl[j], &mut sp[j], &mut bx[j]);
+            }
+        });
+    }
+
+    /// Counts each triangle's slots, once each (cubes of one triangle may share a slot: the
+    /// stamp holds the last triangle counted in each slot), kept in `slots` (triangle t's at
+    /// `slot_start[t]..slot_start[t + 1]`) for the fill; `start` becomes the slots' offsets.
+    /// Serial, a few operations per cube. A triangle over more than `BIG_CELLS` cubes goes on
+    /// the list every query reads instead.
+    fn count_slots(&mut self) {
+        let size = (2 * self.span.len()).max(16).next_power_of_two();
         self.mask = size - 1;
-        // Count: each triangle's slots, once each (cubes of one triangle may share a slot: the
-        // stamp holds the last triangle counted in each slot), kept in `slots` (triangle t's at
-        // `slot_start[t]..slot_start[t + 1]`) for the fill. Serial, a few operations per cube.
         self.start.clear();
         self.start.resize(size + 1, 0);
         self.stamp.clear();
@@ -710,11 +648,15 @@ impl ClothHash {
         for s in 0..size {
             self.start[s + 1] += self.start[s];
         }
-        // Fill, triangle by triangle: each slot lists its triangles in increasing order.
+    }
+
+    /// Fills the table, triangle by triangle: each slot lists its triangles in increasing order.
+    fn fill_slots(&mut self) {
+        let size = self.mask + 1;
         self.fill.clear();
         self.fill.extend_from_slice(&self.start[..size]);
         self.entries.resize(self.start[size] as usize, 0);
-        for t in 0..nt {
+        for t in 0..self.span.len() {
             for &slot in &self.slots[self.slot_start[t] as usize..self.slot_start[t + 1] as usize] {
                 let f = &mut self.fill[slot as usize];
                 self.entries[*f as usize] = t as u32;
@@ -859,6 +801,126 @@ fn check_built(x: &[Point3], triangles: &[[u32; 3]], hash: &ClothHash) {
             && checksum(x).to_bits() == hash.positions.to_bits(),
         "the hash was built at other positions: rebuild it at these"
     );
+}
+
+/// What a triangle's cubes are measured against: the table's origin and inverse cube edge,
+/// the margin (m) and the contact reach (`None`: a plain rebuild), as [`ClothHash::build`].
+struct Grid {
+    origin: Point3,
+    inv_cell: f64,
+    margin: f64,
+    contact: Option<f64>,
+}
+
+/// Triangle `c`'s plane `pl`, slabs `sl` (for contacts), range of cubes `sp` and `f32` box
+/// `bx`: its box grown by the margin, or for contacts the box of the triangle with its edge
+/// lines moved out by the margin (mitred) grown by `reach |n_a|` along axis `a`; a triangle
+/// with a corner too sharp for a finite miter, or no area, spans every cube.
+fn triangle_box(
+    c: &[Point3; 3],
+    g: &Grid,
+    pl: &mut Plane,
+    sl: &mut Slabs,
+    sp: &mut [u32; 6],
+    bx: &mut [f32; 6],
+) {
+    let (e0, e1) = (c[1] - c[0], c[2] - c[0]);
+    let n = e0.cross(&e1);
+    let l = n.norm();
+    let ok = l > 0.0 && l.is_finite();
+    let n = if ok { n / l } else { Vec3::zeros() };
+    *pl = [n.x, n.y, n.z, n.dot(&c[0].coords)];
+    let (mut lo, mut hi) = ([c[0].x, c[0].y, c[0].z], [c[0].x, c[0].y, c[0].z]);
+    widen(&mut lo, &mut hi, &c[1]);
+    widen(&mut lo, &mut hi, &c[2]);
+    let everywhere = match g.contact {
+        None => {
+            for ax in 0..3 {
+                lo[ax] -= g.margin;
+                hi[ax] += g.margin;
+            }
+            false
+        }
+        Some(reach) if ok => !mitred_box(c, &n, g.margin, reach, sl, &mut lo, &mut hi),
+        // Degenerate: never a pair, but listed everywhere rather than nowhere.
+        Some(_) => true,
+    };
+    if everywhere {
+        let top = MAX_CUBES_AXIS as u32;
+        *sp = [0, 0, 0, top, top, top];
+        *bx = [
+            f32::NEG_INFINITY,
+            f32::NEG_INFINITY,
+            f32::NEG_INFINITY,
+            f32::INFINITY,
+            f32::INFINITY,
+            f32::INFINITY,
+        ];
+        return;
+    }
+    for ax in 0..3 {
+        // Non-negative by the origin's choice: truncation is floor (a mitred corner may reach
+        // below it: clamped, no point is there).
+        let (a, b) = (
+            (lo[ax] - g.origin[ax]) * g.inv_cell,
+            (hi[ax] - g.origin[ax]) * g.inv_cell,
+        );
+        sp[ax] = if a > 0.0 { a as u32 } else { 0 };
+        sp[ax + 3] = if b > MAX_CUBES_AXIS {
+            MAX_CUBES_AXIS as u32
+        } else if b > 0.0 {
+            b as u32
+        } else {
+            0
+        };
+        bx[ax] = round32(lo[ax], false);
+        bx[ax + 3] = round32(hi[ax], true);
+    }
+}
+
+/// The box `lo`, `hi` widened to hold `q`.
+#[inline]
+fn widen(lo: &mut [f64; 3], hi: &mut [f64; 3], q: &Point3) {
+    for ax in 0..3 {
+        lo[ax] = lo[ax].min(q[ax]);
+        hi[ax] = hi[ax].max(q[ax]);
+    }
+}
+
+/// A contact box (`lo`, `hi`, holding the triangle `c` already): the slabs `sl` of its
+/// edges (inward edge normals `n x e / |e|`), its corners moved out by `margin` with both
+/// edge lines (mitred: by `-margin (m1 + m2) / (1 + m1 . m2)`), then grown by `reach |n_a|`
+/// along each axis `a`. False when a corner is too sharp for a finite miter.
+fn mitred_box(
+    c: &[Point3; 3],
+    n: &Vec3,
+    margin: f64,
+    reach: f64,
+    sl: &mut Slabs,
+    lo: &mut [f64; 3],
+    hi: &mut [f64; 3],
+) -> bool {
+    let edges = [c[1] - c[0], c[2] - c[1], -(c[2] - c[0])];
+    let mut m = [Vec3::zeros(); 3];
+    for k in 0..3 {
+        m[k] = n.cross(&edges[k]) / edges[k].norm();
+        sl[k] = [m[k].x, m[k].y, m[k].z, m[k].dot(&c[k].coords)];
+    }
+    for k in 0..3 {
+        let (m1, m2) = (m[(k + 2) % 3], m[k]);
+        let den = 1.0 + m1.dot(&m2);
+        if den.is_nan() || den <= 1e-9 {
+            return false;
+        }
+        let q = c[k] - (m1 + m2) * (margin / den);
+        widen(lo, hi, &q);
+    }
+    for ax in 0..3 {
+        let g = reach * n[ax].abs();
+        lo[ax] -= g;
+        hi[ax] += g;
+    }
+    true
 }
 
 /// Cubes in an inclusive range.
