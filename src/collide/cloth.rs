@@ -1583,6 +1583,34 @@ pub fn resolve_self(
     });
     hash.build(x, triangles, cell, LATERAL * h_max, Some(DETECT * h_max));
     let mut work = std::mem::take(&mut hash.work);
+    triangle_thickness(&mut work, triangles, thickness);
+    gather_pairs(&mut work, hash, x_old, x, &cloth);
+    let np = work.pairs.len();
+    stats.candidates = np;
+    work.ever.clear();
+    work.ever.resize(np, false);
+    for flags in [&mut work.moved_last, &mut work.moved_any] {
+        flags.clear();
+        flags.resize(n, false);
+    }
+    stats.contacts = position_passes(&mut work, x, &cloth, opts.iterations);
+    // Velocities, for the pairs corrected above.
+    work.list.clear();
+    for e in 0..np {
+        if work.ever[e] {
+            work.list.push(e as u32);
+        }
+    }
+    stats.corrected = work.list.len();
+    stats.approaching = velocity_passes(&mut work, x, v, &cloth, opts, dt);
+    stats.remaining = remaining(&work, x, triangles);
+    hash.work = work;
+    stats.seconds = start.elapsed().as_secs_f64();
+    stats
+}
+
+/// Each triangle's thickness: the mean of its corners', m (`work.tri_h`).
+fn triangle_thickness(work: &mut Work, triangles: &[[u32; 3]], thickness: &[f64]) {
     work.tri_h.resize(triangles.len(), 0.0);
     par::for_chunks(CHUNK * 4, &mut work.tri_h, |base, hs| {
         for (k, h) in hs.iter_mut().enumerate() {
@@ -1593,48 +1621,59 @@ pub fn resolve_self(
                 / 3.0;
         }
     });
-    // Pairs, found per particle over fixed chunks, in particle order.
-    {
-        let chunks = n.div_ceil(CHUNK);
-        work.chunks
-            .resize_with(chunks.max(work.chunks.len()), Vec::new);
-        let (h, xr, tri_h): (&ClothHash, &[Point3], &[f64]) = (hash, x, &work.tri_h);
-        par::for_each_mut(&mut work.chunks[..chunks], par::parallel(n), |c, out| {
-            out.clear();
-            let r = c * CHUNK..((c + 1) * CHUNK).min(n);
-            find_pairs(h, x_old, xr, &cloth, tri_h, r, out);
-        });
-        work.pairs.clear();
-        for c in &work.chunks[..chunks] {
-            work.pairs.extend_from_slice(c);
-        }
+}
+
+/// The pairs of particle and triangle within reach (`work.pairs`), found per particle over
+/// fixed chunks, in particle order.
+fn gather_pairs(
+    work: &mut Work,
+    hash: &ClothHash,
+    x_old: &[Point3],
+    x: &[Point3],
+    cloth: &SelfCloth<'_>,
+) {
+    let n = x.len();
+    let chunks = n.div_ceil(CHUNK);
+    work.chunks
+        .resize_with(chunks.max(work.chunks.len()), Vec::new);
+    let tri_h: &[f64] = &work.tri_h;
+    par::for_each_mut(&mut work.chunks[..chunks], par::parallel(n), |c, out| {
+        out.clear();
+        let r = c * CHUNK..((c + 1) * CHUNK).min(n);
+        find_pairs(hash, x_old, x, cloth, tri_h, r, out);
+    });
+    work.pairs.clear();
+    for c in &work.chunks[..chunks] {
+        work.pairs.extend_from_slice(c);
     }
-    let np = work.pairs.len();
-    stats.candidates = np;
-    work.ever.clear();
-    work.ever.resize(np, false);
-    for flags in [&mut work.moved_last, &mut work.moved_any] {
-        flags.clear();
-        flags.resize(n, false);
-    }
-    // A pair can only change when one of its vertices moves: the first iteration evaluates the
-    // pairs possibly violated where they were found, each later pass those with a vertex the
-    // last correction moved.
+}
+
+/// Up to `iterations` passes pushing the particles of violated pairs out (positions `x`
+/// corrected in place): the first evaluates the pairs possibly violated where they were
+/// found, each later pass those with a vertex the last correction moved (a pair can only
+/// change when one of its vertices moves). The first pass's count of contacts.
+fn position_passes(
+    work: &mut Work,
+    x: &mut [Point3],
+    cloth: &SelfCloth<'_>,
+    iterations: usize,
+) -> usize {
+    let (n, triangles, inv_mass) = (x.len(), cloth.triangles, cloth.inv_mass);
+    let mut contacts = 0;
     work.list.clear();
     for (e, pair) in work.pairs.iter().enumerate() {
         if pair.maybe {
             work.list.push(e as u32);
         }
     }
-    // Positions.
-    for it in 0..opts.iterations {
+    for it in 0..iterations {
         if it > 0 {
             let Work {
                 list,
                 pairs,
                 moved_last,
                 ..
-            } = &mut work;
+            } = &mut *work;
             list.clear();
             for (e, pair) in pairs.iter().enumerate() {
                 if verts(pair, triangles)
@@ -1647,12 +1686,12 @@ pub fn resolve_self(
         }
         let active = {
             let xr: &[Point3] = x;
-            evaluate(&mut work, n, triangles, |e, pair| {
+            evaluate(work, n, triangles, |e, pair| {
                 position_push(e, pair, xr, triangles, inv_mass)
             })
         };
         if it == 0 {
-            stats.contacts = active;
+            contacts = active;
         }
         if active == 0 {
             break;
@@ -1672,23 +1711,32 @@ pub fn resolve_self(
             }
         });
     }
-    // Velocities, for the pairs corrected above.
-    work.list.clear();
-    for e in 0..np {
-        if work.ever[e] {
-            work.list.push(e as u32);
-        }
-    }
-    stats.corrected = work.list.len();
+    contacts
+}
+
+/// Up to `opts.iterations` passes over the pairs listed in `work.list` removing their
+/// approaching relative normal velocity (with Coulomb friction when asked; friction's
+/// tangential change also moves `x` by `dt` times it). The first pass's count of approaching
+/// pairs.
+fn velocity_passes(
+    work: &mut Work,
+    x: &mut [Point3],
+    v: &mut [Vec3],
+    cloth: &SelfCloth<'_>,
+    opts: &SelfCollisionOptions,
+    dt: f64,
+) -> usize {
+    let (n, triangles, inv_mass) = (x.len(), cloth.triangles, cloth.inv_mass);
+    let mut approaching = 0;
     for it in 0..opts.iterations {
         let active = {
             let (xr, vr): (&[Point3], &[Vec3]) = (x, v);
-            evaluate(&mut work, n, triangles, |e, pair| {
+            evaluate(work, n, triangles, |e, pair| {
                 velocity_push(e, pair, xr, vr, triangles, inv_mass, opts.friction)
             })
         };
         if it == 0 {
-            stats.approaching = active;
+            approaching = active;
         }
         if active == 0 {
             break;
@@ -1706,24 +1754,23 @@ pub fn resolve_self(
             }
         });
     }
-    // Still closer than the contact distance: among the pairs with a vertex moved in this call,
-    // and those possibly violated where found (the others are as they were found: apart).
-    stats.remaining = {
-        let (pairs, xr, any): (&[Pair], &[Point3], &[bool]) = (&work.pairs, x, &work.moved_any);
-        map_chunks(np, |r| {
-            r.filter(|&e| {
-                let pair = &pairs[e];
-                (pair.maybe || verts(pair, triangles).iter().any(|&v| any[v as usize]))
-                    && matches!(violation(pair, xr, triangles), Some((c, _, _)) if c < -REMAIN_TOL * pair.h)
-            })
-            .count()
+    approaching
+}
+
+/// The pairs still closer than the contact distance: among those with a vertex moved in this
+/// call, and those possibly violated where found (the others are as they were found: apart).
+fn remaining(work: &Work, x: &[Point3], triangles: &[[u32; 3]]) -> usize {
+    let (pairs, any): (&[Pair], &[bool]) = (&work.pairs, &work.moved_any);
+    map_chunks(pairs.len(), |r| {
+        r.filter(|&e| {
+            let pair = &pairs[e];
+            (pair.maybe || verts(pair, triangles).iter().any(|&v| any[v as usize]))
+                && matches!(violation(pair, x, triangles), Some((c, _, _)) if c < -REMAIN_TOL * pair.h)
         })
-        .into_iter()
-        .sum()
-    };
-    hash.work = work;
-    stats.seconds = start.elapsed().as_secs_f64();
-    stats
+        .count()
+    })
+    .into_iter()
+    .sum()
 }
 
 #[cfg(test)]
