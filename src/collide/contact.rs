@@ -159,184 +159,267 @@ pub fn resolve(
     th: f64,
     contact: &mut Option<Contact>,
 ) -> bool {
-    let mut touched = false;
-    // Sliding: stay on the face, or move to one around it.
-    if let Some(ct) = *contact {
-        let c = &colliders[ct.object as usize];
-        let th = th + c.clearance;
-        // Held while the projection is inside the face and the particle has not left it; pushed
-        // out to the thickness if it came closer, never pulled in.
-        let keep = |f: usize, side: f64, p1: &Point3| -> Option<Point3> {
-            let (n, off) = c.plane(f);
-            let dp = p1.coords.dot(&n) - off;
-            let d = side * dp;
-            if d > 1.5 * th || d < -th {
-                return None;
-            }
-            let q = p1 - n * dp;
-            inside_face(c, f, &q).then(|| if d < th { q + n * (side * th) } else { *p1 })
-        };
-        let f = ct.face as usize;
-        let mut held = keep(f, ct.side, p1).map(|p| (p, f, ct.side));
-        if held.is_none() {
-            // Objects are prepared with one winding, so the particle is on the same side of
-            // the faces around (a side taken from its position would put it inside the object
-            // at a convex edge, where it is behind the next face's plane).
-            for &g in c.ring(f) {
-                let g = g as usize;
-                if let Some(p) = keep(g, ct.side, p1) {
-                    held = Some((p, g, ct.side));
-                    break;
-                }
-            }
-        }
-        match held {
-            Some((p, g, side)) => {
-                *p1 = p;
-                stop_into(v, &(c.plane(g).0 * side));
-                *contact = Some(Contact {
-                    object: ct.object,
-                    face: g as u32,
-                    side,
-                });
-                touched = true;
-            }
-            None => *contact = None,
-        }
-    }
-    // A step that starts and ends in one empty cell of every object meets nothing.
-    if !touched
-        && colliders.iter().enumerate().all(|(oi, c)| {
-            if !reachable[oi] || !near(c, p0, p1, th + c.clearance + c.margin) {
-                return true;
-            }
-            let g = c.grid();
-            let (a, b) = (g.clamp_cell(p0), g.clamp_cell(p1));
-            a == b
-                && c.bbox.contains(p0, c.margin)
-                && c.bbox.contains(p1, c.margin)
-                && g.cell_faces(g.linear(a[0], a[1], a[2])).is_empty()
-        })
-    {
-        return false;
-    }
+    let mut touched = match *contact {
+        Some(ct) => slide(colliders, ct, p1, v, th, contact),
+        None => false,
+    };
     if !touched {
-        // Passing through: the earliest crossing along the segment, again after each correction.
-        for _ in 0..3 {
-            let mut best: Option<Crossing> = None;
-            for (oi, c) in colliders.iter().enumerate() {
-                if !reachable[oi] || !near(c, p0, p1, th + c.clearance + c.margin) {
-                    continue;
-                }
-                let grid = c.grid();
-                // A face listed in several cells may be tested twice: same answer, no harm.
-                grid.traverse(p0, p1, |cell| {
-                    for &f in grid.cell_faces(cell) {
-                        if let Some((t, side)) = crossing(c, f as usize, p0, p1) {
-                            let cand = Crossing {
-                                t,
-                                object: oi,
-                                face: f,
-                                side,
-                            };
-                            if best.is_none_or(|b| (t, oi, f) < (b.t, b.object, b.face)) {
-                                best = Some(cand);
-                            }
-                        }
-                    }
-                    true
-                });
-            }
-            let Some(h) = best else { break };
-            let c = &colliders[h.object];
-            let th = th + c.clearance;
-            let f = h.face as usize;
-            let (n, off) = c.plane(f);
-            let q1 = *p1 - n * (p1.coords.dot(&n) - off);
-            let (q, face) = if inside_face(c, f, &q1) {
-                (q1 + n * (h.side * th), f)
-            } else if let Some(g) = beside(c, f, h.side, p1) {
-                // Out over a face around: pushed out of it along its normal.
-                let (ng, og) = c.plane(g);
-                (*p1 - ng * (p1.coords.dot(&ng) - og) + ng * (h.side * th), g)
-            } else {
-                let r = p0 + (*p1 - p0) * h.t;
-                (r - n * (r.coords.dot(&n) - off) + n * (h.side * th), f)
-            };
-            *p1 = q;
-            stop_into(v, &(c.plane(face).0 * h.side));
-            *contact = Some(Contact {
-                object: h.object as u32,
-                face: face as u32,
-                side: h.side,
-            });
-            touched = true;
+        if meets_nothing(colliders, reachable, p0, p1, th) {
+            return false;
         }
+        touched = pass_through(colliders, reachable, p0, p1, v, th, contact);
     }
     // A particle held in front of a face where the surface is locally convex is at least the
     // thickness from every face around: nothing more to check.
     let convex_hold = matches!(*contact, Some(ct) if ct.side > 0.0 && colliders[ct.object as usize].convex[ct.face as usize]);
-    // Thickness: push out of every face nearer than th, along its normal or away from its edge.
     if (th > 0.0 || colliders.iter().any(|c| c.clearance > 0.0)) && !convex_hold {
-        for _ in 0..2 {
-            let mut moved = false;
-            for (oi, c) in colliders.iter().enumerate() {
-                let th = th + c.clearance;
-                if !reachable[oi] || !c.bbox.contains(p1, th + c.margin) {
-                    continue;
-                }
-                let grid = c.grid();
-                let cell = grid.clamp_cell(p1);
-                for &f in grid.cell_faces(grid.linear(cell[0], cell[1], cell[2])) {
-                    let f = f as usize;
-                    let (n, off) = c.plane(f);
-                    let dp = p1.coords.dot(&n) - off;
-                    if dp.abs() >= th || n == Vec3::zeros() {
-                        continue;
-                    }
-                    // Pass-throughs are resolved: the particle is on its side of the plane now.
-                    let side = if dp >= 0.0 { 1.0 } else { -1.0 };
-                    let proj = *p1 - n * dp;
-                    let interior = inside_face(c, f, &proj);
-                    let (q, d) = if interior {
-                        (proj, dp.abs())
-                    } else {
-                        let [fa, fb, fc] = c.mesh.corners(f);
-                        let q = closest_on_triangle(p1, &fa, &fb, &fc);
-                        (q, (*p1 - q).norm())
-                    };
-                    if d >= th {
-                        continue;
-                    }
-                    let dir = if interior || d == 0.0 {
-                        n * side
-                    } else {
-                        (*p1 - q) / d
-                    };
-                    *p1 = q + dir * th;
-                    stop_into(v, &dir);
-                    if interior || contact.is_none() {
-                        // Pushed away from an edge of a closed (outward) object, the particle is
-                        // outside it whatever side of this face's plane it is on (beside a
-                        // square rim it is behind the plane of the face below): a contact on
-                        // the inner side would hold it inside the next face round the rim.
-                        let side = if interior || !c.closed { side } else { 1.0 };
-                        *contact = Some(Contact {
-                            object: oi as u32,
-                            face: f as u32,
-                            side,
-                        });
-                    }
-                    touched = true;
-                    moved = true;
-                }
-            }
-            if !moved {
+        touched |= keep_thickness(colliders, reachable, p1, v, th, contact);
+    }
+    touched
+}
+
+/// Sliding on the face of `ct`: the particle stays on it, or moves to one around it, while its
+/// projection is inside the face and it has not left it (pushed out to the thickness if it came
+/// closer, never pulled in); else the contact ends. Whether it is still held.
+#[inline]
+fn slide(
+    colliders: &[Collider],
+    ct: Contact,
+    p1: &mut Point3,
+    v: &mut Vec3,
+    th: f64,
+    contact: &mut Option<Contact>,
+) -> bool {
+    let c = &colliders[ct.object as usize];
+    let th = th + c.clearance;
+    let keep = |f: usize, side: f64, p1: &Point3| -> Option<Point3> {
+        let (n, off) = c.plane(f);
+        let dp = p1.coords.dot(&n) - off;
+        let d = side * dp;
+        if d > 1.5 * th || d < -th {
+            return None;
+        }
+        let q = p1 - n * dp;
+        inside_face(c, f, &q).then(|| if d < th { q + n * (side * th) } else { *p1 })
+    };
+    let f = ct.face as usize;
+    let mut held = keep(f, ct.side, p1).map(|p| (p, f, ct.side));
+    if held.is_none() {
+        // Objects are prepared with one winding, so the particle is on the same side of the
+        // faces around (a side taken from its position would put it inside the object at a
+        // convex edge, where it is behind the next face's plane).
+        for &g in c.ring(f) {
+            let g = g as usize;
+            if let Some(p) = keep(g, ct.side, p1) {
+                held = Some((p, g, ct.side));
                 break;
             }
         }
     }
+    let Some((p, g, side)) = held else {
+        *contact = None;
+        return false;
+    };
+    *p1 = p;
+    stop_into(v, &(c.plane(g).0 * side));
+    *contact = Some(Contact {
+        object: ct.object,
+        face: g as u32,
+        side,
+    });
+    true
+}
+
+/// Whether the step from `p0` to `p1` starts and ends in one empty cell of every object it
+/// comes near (then it meets nothing).
+#[inline]
+fn meets_nothing(
+    colliders: &[Collider],
+    reachable: &[bool],
+    p0: &Point3,
+    p1: &Point3,
+    th: f64,
+) -> bool {
+    colliders.iter().enumerate().all(|(oi, c)| {
+        if !reachable[oi] || !near(c, p0, p1, th + c.clearance + c.margin) {
+            return true;
+        }
+        let g = c.grid();
+        let (a, b) = (g.clamp_cell(p0), g.clamp_cell(p1));
+        a == b
+            && c.bbox.contains(p0, c.margin)
+            && c.bbox.contains(p1, c.margin)
+            && g.cell_faces(g.linear(a[0], a[1], a[2])).is_empty()
+    })
+}
+
+/// The earliest face the segment `p0`-`p1` crosses, of every reachable object near it (ties
+/// to the lowest object, then face).
+fn earliest_crossing(
+    colliders: &[Collider],
+    reachable: &[bool],
+    p0: &Point3,
+    p1: &Point3,
+    th: f64,
+) -> Option<Crossing> {
+    let mut best: Option<Crossing> = None;
+    for (oi, c) in colliders.iter().enumerate() {
+        if !reachable[oi] || !near(c, p0, p1, th + c.clearance + c.margin) {
+            continue;
+        }
+        let grid = c.grid();
+        // A face listed in several cells may be tested twice: same answer, no harm.
+        grid.traverse(p0, p1, |cell| {
+            for &f in grid.cell_faces(cell) {
+                if let Some((t, side)) = crossing(c, f as usize, p0, p1) {
+                    let cand = Crossing {
+                        t,
+                        object: oi,
+                        face: f,
+                        side,
+                    };
+                    if best.is_none_or(|b| (t, oi, f) < (b.t, b.object, b.face)) {
+                        best = Some(cand);
+                    }
+                }
+            }
+            true
+        });
+    }
+    best
+}
+
+/// Passing through: the earliest crossing along the segment, corrected, again after each
+/// correction (three at most). The particle is put on the crossed face's side at the
+/// thickness: over the face, over a face around it, or where its path met the plane.
+/// Whether it crossed anything.
+#[allow(clippy::too_many_arguments)]
+fn pass_through(
+    colliders: &[Collider],
+    reachable: &[bool],
+    p0: &Point3,
+    p1: &mut Point3,
+    v: &mut Vec3,
+    th: f64,
+    contact: &mut Option<Contact>,
+) -> bool {
+    let mut touched = false;
+    for _ in 0..3 {
+        let Some(h) = earliest_crossing(colliders, reachable, p0, p1, th) else {
+            break;
+        };
+        let c = &colliders[h.object];
+        let th = th + c.clearance;
+        let f = h.face as usize;
+        let (n, off) = c.plane(f);
+        let q1 = *p1 - n * (p1.coords.dot(&n) - off);
+        let (q, face) = if inside_face(c, f, &q1) {
+            (q1 + n * (h.side * th), f)
+        } else if let Some(g) = beside(c, f, h.side, p1) {
+            // Out over a face around: pushed out of it along its normal.
+            let (ng, og) = c.plane(g);
+            (*p1 - ng * (p1.coords.dot(&ng) - og) + ng * (h.side * th), g)
+        } else {
+            let r = p0 + (*p1 - p0) * h.t;
+            (r - n * (r.coords.dot(&n) - off) + n * (h.side * th), f)
+        };
+        *p1 = q;
+        stop_into(v, &(c.plane(face).0 * h.side));
+        *contact = Some(Contact {
+            object: h.object as u32,
+            face: face as u32,
+            side: h.side,
+        });
+        touched = true;
+    }
     touched
+}
+
+/// Thickness: the particle pushed out of every face nearer than the thickness (plus the
+/// object's clearance), along its normal or away from its edge, in two rounds at most.
+/// Whether it was moved.
+fn keep_thickness(
+    colliders: &[Collider],
+    reachable: &[bool],
+    p1: &mut Point3,
+    v: &mut Vec3,
+    th: f64,
+    contact: &mut Option<Contact>,
+) -> bool {
+    let mut touched = false;
+    for _ in 0..2 {
+        let mut moved = false;
+        for (oi, c) in colliders.iter().enumerate() {
+            let th = th + c.clearance;
+            if !reachable[oi] || !c.bbox.contains(p1, th + c.margin) {
+                continue;
+            }
+            let grid = c.grid();
+            let cell = grid.clamp_cell(p1);
+            for &f in grid.cell_faces(grid.linear(cell[0], cell[1], cell[2])) {
+                if push_from_face(c, oi, f as usize, p1, v, th, contact) {
+                    touched = true;
+                    moved = true;
+                }
+            }
+        }
+        if !moved {
+            break;
+        }
+    }
+    touched
+}
+
+/// The particle pushed out to `th` from face `f` of object `oi` (`c`) when nearer: along the
+/// normal over the face, away from the nearest point of its edge beside it. Whether it moved.
+fn push_from_face(
+    c: &Collider,
+    oi: usize,
+    f: usize,
+    p1: &mut Point3,
+    v: &mut Vec3,
+    th: f64,
+    contact: &mut Option<Contact>,
+) -> bool {
+    let (n, off) = c.plane(f);
+    let dp = p1.coords.dot(&n) - off;
+    if dp.abs() >= th || n == Vec3::zeros() {
+        return false;
+    }
+    // Pass-throughs are resolved: the particle is on its side of the plane now.
+    let side = if dp >= 0.0 { 1.0 } else { -1.0 };
+    let proj = *p1 - n * dp;
+    let interior = inside_face(c, f, &proj);
+    let (q, d) = if interior {
+        (proj, dp.abs())
+    } else {
+        let [fa, fb, fc] = c.mesh.corners(f);
+        let q = closest_on_triangle(p1, &fa, &fb, &fc);
+        (q, (*p1 - q).norm())
+    };
+    if d >= th {
+        return false;
+    }
+    let dir = if interior || d == 0.0 {
+        n * side
+    } else {
+        (*p1 - q) / d
+    };
+    *p1 = q + dir * th;
+    stop_into(v, &dir);
+    if interior || contact.is_none() {
+        // Pushed away from an edge of a closed (outward) object, the particle is outside it
+        // whatever side of this face's plane it is on (beside a square rim it is behind the
+        // plane of the face below): a contact on the inner side would hold it inside the next
+        // face round the rim.
+        let side = if interior || !c.closed { side } else { 1.0 };
+        *contact = Some(Contact {
+            object: oi as u32,
+            face: f as u32,
+            side,
+        });
+    }
+    true
 }
 
 #[cfg(test)]
