@@ -146,6 +146,20 @@ fn beside(c: &Collider, f: usize, side: f64, p: &Point3) -> Option<usize> {
     })
 }
 
+/// The objects a particle may meet: each one and whether it is reachable this step.
+#[derive(Clone, Copy)]
+struct Objects<'a> {
+    colliders: &'a [Collider],
+    reachable: &'a [bool],
+}
+
+impl Objects<'_> {
+    /// The reachable objects, with their index.
+    fn each(&self) -> impl Iterator<Item = (usize, &Collider)> {
+        (self.colliders.iter().enumerate()).filter(|&(oi, _)| self.reachable[oi])
+    }
+}
+
 /// Collision of one particle with all objects after a step: `p0` its previous position, `p1` and
 /// `v` its new position and velocity (corrected in place), `contact` its sliding state. Objects
 /// whose `reachable` flag is false are skipped. Returns whether it touches an object.
@@ -163,17 +177,21 @@ pub fn resolve(
         Some(ct) => slide(colliders, ct, p1, v, th, contact),
         None => false,
     };
+    let objects = Objects {
+        colliders,
+        reachable,
+    };
     if !touched {
-        if meets_nothing(colliders, reachable, p0, p1, th) {
+        if meets_nothing(objects, p0, p1, th) {
             return false;
         }
-        touched = pass_through(colliders, reachable, p0, p1, v, th, contact);
+        touched = pass_through(objects, p0, p1, v, th, contact);
     }
     // A particle held in front of a face where the surface is locally convex is at least the
     // thickness from every face around: nothing more to check.
     let convex_hold = matches!(*contact, Some(ct) if ct.side > 0.0 && colliders[ct.object as usize].convex[ct.face as usize]);
     if (th > 0.0 || colliders.iter().any(|c| c.clearance > 0.0)) && !convex_hold {
-        touched |= keep_thickness(colliders, reachable, p1, v, th, contact);
+        touched |= keep_thickness(objects, p1, v, th, contact);
     }
     touched
 }
@@ -233,15 +251,9 @@ fn slide(
 /// Whether the step from `p0` to `p1` starts and ends in one empty cell of every object it
 /// comes near (then it meets nothing).
 #[inline]
-fn meets_nothing(
-    colliders: &[Collider],
-    reachable: &[bool],
-    p0: &Point3,
-    p1: &Point3,
-    th: f64,
-) -> bool {
-    colliders.iter().enumerate().all(|(oi, c)| {
-        if !reachable[oi] || !near(c, p0, p1, th + c.clearance + c.margin) {
+fn meets_nothing(objects: Objects, p0: &Point3, p1: &Point3, th: f64) -> bool {
+    objects.each().all(|(_, c)| {
+        if !near(c, p0, p1, th + c.clearance + c.margin) {
             return true;
         }
         let g = c.grid();
@@ -255,16 +267,10 @@ fn meets_nothing(
 
 /// The earliest face the segment `p0`-`p1` crosses, of every reachable object near it (ties
 /// to the lowest object, then face).
-fn earliest_crossing(
-    colliders: &[Collider],
-    reachable: &[bool],
-    p0: &Point3,
-    p1: &Point3,
-    th: f64,
-) -> Option<Crossing> {
+fn earliest_crossing(objects: Objects, p0: &Point3, p1: &Point3, th: f64) -> Option<Crossing> {
     let mut best: Option<Crossing> = None;
-    for (oi, c) in colliders.iter().enumerate() {
-        if !reachable[oi] || !near(c, p0, p1, th + c.clearance + c.margin) {
+    for (oi, c) in objects.each() {
+        if !near(c, p0, p1, th + c.clearance + c.margin) {
             continue;
         }
         let grid = c.grid();
@@ -293,10 +299,8 @@ fn earliest_crossing(
 /// correction (three at most). The particle is put on the crossed face's side at the
 /// thickness: over the face, over a face around it, or where its path met the plane.
 /// Whether it crossed anything.
-#[allow(clippy::too_many_arguments)]
 fn pass_through(
-    colliders: &[Collider],
-    reachable: &[bool],
+    objects: Objects,
     p0: &Point3,
     p1: &mut Point3,
     v: &mut Vec3,
@@ -305,10 +309,10 @@ fn pass_through(
 ) -> bool {
     let mut touched = false;
     for _ in 0..3 {
-        let Some(h) = earliest_crossing(colliders, reachable, p0, p1, th) else {
+        let Some(h) = earliest_crossing(objects, p0, p1, th) else {
             break;
         };
-        let c = &colliders[h.object];
+        let c = &objects.colliders[h.object];
         let th = th + c.clearance;
         let f = h.face as usize;
         let (n, off) = c.plane(f);
@@ -339,8 +343,7 @@ fn pass_through(
 /// object's clearance), along its normal or away from its edge, in two rounds at most.
 /// Whether it was moved.
 fn keep_thickness(
-    colliders: &[Collider],
-    reachable: &[bool],
+    objects: Objects,
     p1: &mut Point3,
     v: &mut Vec3,
     th: f64,
@@ -349,9 +352,9 @@ fn keep_thickness(
     let mut touched = false;
     for _ in 0..2 {
         let mut moved = false;
-        for (oi, c) in colliders.iter().enumerate() {
+        for (oi, c) in objects.each() {
             let th = th + c.clearance;
-            if !reachable[oi] || !c.bbox.contains(p1, th + c.margin) {
+            if !c.bbox.contains(p1, th + c.margin) {
                 continue;
             }
             let grid = c.grid();
