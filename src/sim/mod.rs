@@ -709,6 +709,145 @@ impl Loop {
     }
 }
 
+/// A step's scratch: the positions and velocities it makes, and the predict phase's output.
+struct Next {
+    x: Vec<Point3>,
+    v: Vec<Vec3>,
+    pred: Predicted,
+}
+
+/// Which objects the particles can reach this step (`travel`: the last step's largest move),
+/// each object's grid marked as first needed at `step`.
+fn reach_phase(world: &mut World, travel: f64, step: u64) -> Vec<bool> {
+    let reach = reachable(&world.state.x, &world.colliders, travel);
+    for (i, r) in reach.iter().enumerate() {
+        if *r && world.grid_built_at[i].is_none() {
+            world.grid_built_at[i] = Some(step);
+        }
+    }
+    reach
+}
+
+impl Loop {
+    /// The solve phase: the integrator's step from the state to `next` (with the objects in
+    /// `reach` for the contacts it handles itself).
+    fn solve(
+        &mut self,
+        world: &mut World,
+        solver: &mut dyn Solver,
+        next: &mut Next,
+        reach: &[bool],
+        settings: &SolverSettings,
+        step: u64,
+    ) -> Result<(), SimError> {
+        let dt = settings.dt;
+        let World {
+            model,
+            state,
+            colliders,
+            ..
+        } = &mut *world;
+        let input = StepIn {
+            model,
+            x: &state.x,
+            v: &state.v,
+            f_ext: &next.pred.f_ext,
+            y: &next.pred.y,
+            colliders,
+            reach,
+            dt,
+        };
+        let mut out = StepOut {
+            x: &mut next.x,
+            v: &mut next.v,
+            contact: &mut state.contact,
+        };
+        match solver.step(&input, &mut out) {
+            Ok(_) => Ok(()),
+            Err(_) => Err(singular(model, settings.integrator, dt, step)),
+        }
+    }
+
+    /// The collide phase on `next`: cloth against cloth first (the body pass has the last
+    /// word, so the self pass never leaves a particle inside the body: a particle that starts
+    /// a step inside is not caught by the body's segment test), then the objects, then the
+    /// objects' tips through the cloth; the work it puts in is counted by the energy watch.
+    fn collide(
+        &mut self,
+        world: &mut World,
+        solver: &dyn Solver,
+        next: &mut Next,
+        reach: &[bool],
+        settings: &SolverSettings,
+    ) {
+        let dt = settings.dt;
+        let World {
+            model,
+            state,
+            colliders,
+            self_contact,
+            ..
+        } = &mut *world;
+        let (x_new, v_new) = (&mut next.x, &mut next.v);
+        // The work the collide phase does on the cloth (its projections can stretch springs
+        // at large steps) is counted as work put in; explicit steps are too small to need it.
+        let before = (!settings.integrator.is_explicit())
+            .then(|| watch::mechanical(model, x_new, v_new, &state.x));
+        if let Some(sc) = self_contact {
+            sc.apply(model, &state.x, x_new, v_new, dt);
+        }
+        self.travel = collide(
+            model,
+            colliders,
+            reach,
+            solver.friction_in_collide(),
+            dt,
+            &state.x,
+            x_new,
+            v_new,
+            &mut state.contact,
+        );
+        if let Some(sc) = self_contact {
+            sc.push_tips(model, colliders, reach, x_new, v_new);
+        }
+        if let Some(e) = before {
+            self.watch
+                .add_work(watch::mechanical(model, x_new, v_new, &state.x) - e);
+        }
+        if !model.external.is_empty() {
+            let w = par::sum(x_new.len(), |i| {
+                model.external[i].dot(&(x_new[i] - state.x[i]))
+            });
+            self.watch.add_work(w);
+        }
+    }
+
+    /// The measure phase at a check: the stability check (an error when the run went
+    /// unstable), the progress report, and whether the cloth is at rest.
+    fn measure(
+        &mut self,
+        world: &World,
+        settings: &SolverSettings,
+        step: u64,
+        progress: &dyn Fn(u64),
+    ) -> Result<bool, SimError> {
+        let (integrator, dt) = (settings.integrator, settings.dt);
+        if let Err(reason) = self.watch.check(world) {
+            return Err(SimError::Unstable {
+                step,
+                time: step as f64 * dt,
+                reason,
+                integrator,
+                dt,
+                estimate: world.stable_step,
+                advice: integrator.advice(world.stable_step, world.max_frequency),
+            });
+        }
+        progress(step);
+        Ok(self.rest.at_rest(world))
+    }
+}
+
 /// Runs the world with `settings`. `frame(step, world)` is called every `frames` steps; when
 /// it returns `true` the cloth is at rest and the run ends there. `progress(step)` at every
 /// check. `control` cancels it or continues it from a checkpoint (`Control::default()`:
@@ -744,9 +883,11 @@ pub fn run(
         first = c.step + 1;
     }
     let wall_before = lp.stats.wall_seconds;
-    let mut x_new = world.state.x.clone();
-    let mut v_new = world.state.v.clone();
-    let mut pred = Predicted::default();
+    let mut next = Next {
+        x: world.state.x.clone(),
+        v: world.state.v.clone(),
+        pred: Predicted::default(),
+    };
     for step in first..=stop.max_steps() {
         if control.cancel.is_some_and(|c| c.load(Ordering::SeqCst)) {
             lp.stats.wall_seconds = wall_before + start.elapsed().as_secs_f64();
@@ -754,100 +895,23 @@ pub fn run(
             return Err(SimError::Interrupted(Box::new(c)));
         }
         let t = Instant::now();
-        predict(&world.model, &world.state, dt, &mut pred);
+        predict(&world.model, &world.state, dt, &mut next.pred);
         lp.stats.predict_seconds += t.elapsed().as_secs_f64();
         let t = Instant::now();
-        let reach = reachable(&world.state.x, &world.colliders, lp.travel);
-        for (i, r) in reach.iter().enumerate() {
-            if *r && world.grid_built_at[i].is_none() {
-                world.grid_built_at[i] = Some(step);
-            }
+        let reach = reach_phase(world, lp.travel, step);
+        lp.solve(world, &mut *solver, &mut next, &reach, settings, step)?;
+        lp.stats.solve_seconds += t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        lp.collide(world, &*solver, &mut next, &reach, settings);
+        if reach.iter().any(|&r| r) || world.self_contact.is_some() {
+            lp.stats.collision_seconds += t.elapsed().as_secs_f64();
         }
-        {
-            let World {
-                model,
-                state,
-                colliders,
-                self_contact,
-                ..
-            } = &mut *world;
-            let input = StepIn {
-                model,
-                x: &state.x,
-                v: &state.v,
-                f_ext: &pred.f_ext,
-                y: &pred.y,
-                colliders,
-                reach: &reach,
-                dt,
-            };
-            let mut out = StepOut {
-                x: &mut x_new,
-                v: &mut v_new,
-                contact: &mut state.contact,
-            };
-            if solver.step(&input, &mut out).is_err() {
-                return Err(singular(model, integrator, dt, step));
-            }
-            lp.stats.solve_seconds += t.elapsed().as_secs_f64();
-            let t = Instant::now();
-            // The work the collide phase does on the cloth (its projections can stretch springs
-            // at large steps) is counted as work put in; explicit steps are too small to need it.
-            let before = (!integrator.is_explicit())
-                .then(|| watch::mechanical(model, &x_new, &v_new, &state.x));
-            // Cloth against cloth first: the body pass has the last word, so the self pass
-            // never leaves a particle inside the body (a particle that starts a step inside is
-            // not caught by the body's segment test).
-            if let Some(sc) = self_contact {
-                sc.apply(model, &state.x, &mut x_new, &mut v_new, dt);
-            }
-            lp.travel = collide(
-                model,
-                colliders,
-                &reach,
-                solver.friction_in_collide(),
-                dt,
-                &state.x,
-                &mut x_new,
-                &mut v_new,
-                &mut state.contact,
-            );
-            // Then the objects' tips through the cloth (with cloth against cloth: garments).
-            if let Some(sc) = self_contact {
-                sc.push_tips(model, colliders, &reach, &mut x_new, &mut v_new);
-            }
-            if let Some(e) = before {
-                lp.watch
-                    .add_work(watch::mechanical(model, &x_new, &v_new, &state.x) - e);
-            }
-            if !model.external.is_empty() {
-                let w = par::sum(x_new.len(), |i| {
-                    model.external[i].dot(&(x_new[i] - state.x[i]))
-                });
-                lp.watch.add_work(w);
-            }
-            if reach.iter().any(|&r| r) || self_contact.is_some() {
-                lp.stats.collision_seconds += t.elapsed().as_secs_f64();
-            }
-        }
-        std::mem::swap(&mut world.state.x, &mut x_new);
-        std::mem::swap(&mut world.state.v, &mut v_new);
+        std::mem::swap(&mut world.state.x, &mut next.x);
+        std::mem::swap(&mut world.state.v, &mut next.v);
         lp.stats.steps = step;
         if step % check_every(dt) == 0 || step == stop.max_steps() {
             let t = Instant::now();
-            if let Err(reason) = lp.watch.check(world) {
-                return Err(SimError::Unstable {
-                    step,
-                    time: step as f64 * dt,
-                    reason,
-                    integrator,
-                    dt,
-                    estimate: world.stable_step,
-                    advice: integrator.advice(world.stable_step, world.max_frequency),
-                });
-            }
-            progress(step);
-            let done = lp.rest.at_rest(world);
+            let done = lp.measure(world, settings, step, progress)?;
             lp.stats.measure_seconds += t.elapsed().as_secs_f64();
             if done {
                 lp.stats.at_rest = true;
