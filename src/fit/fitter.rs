@@ -318,6 +318,47 @@ pub fn fit_sections(
     targets: &[GirthTarget],
     opts: &FitOptions,
 ) -> Result<Fitted, FitError> {
+    check_options(opts)?;
+    let given = sections.len();
+    let (sections, notes) = section::normalize(sections)?;
+    let mut warnings = Vec::new();
+    if notes.merged_duplicates > 0 {
+        warnings.push(format!(
+            "{} section(s) given twice at one height were merged",
+            notes.merged_duplicates
+        ));
+    }
+    let plan = plan(&sections, opts, &mut warnings)?;
+    let k = plan.used.len();
+    let surface = surface::fit(&node_grid(&plan.used, plan.n), k, plan.n, plan.m);
+    let estimated_error = estimate_error(&sections, &plan, &mut warnings);
+    let (mesh, output) = form(&surface, k, opts, &mut warnings);
+    let girths = measure_girths(&mesh, targets);
+    let max_girth_deviation = girths.iter().map(|g| g.deviation.abs()).fold(0.0, f64::max);
+    let report = FitReport {
+        sections_given: given,
+        nodes_along: k,
+        stride: plan.stride,
+        nodes_around: plan.n,
+        lanczos_requested: plan.m_req,
+        lanczos: plan.m,
+        estimated_error,
+        tolerance: plan.choice,
+        girths,
+        max_girth_deviation,
+        output,
+        sections: notes,
+        warnings,
+    };
+    Ok(Fitted {
+        mesh,
+        surface,
+        report,
+    })
+}
+
+/// The options' counts and order within what the fit supports.
+fn check_options(opts: &FitOptions) -> Result<(), FitError> {
     if opts.nodes_around < 3 || opts.around < 3 || opts.along < 2 || opts.stride < 1 {
         return Err(FitError::Options(
             "nodes around and points around must be at least 3, rings along at least 2".into(),
@@ -330,20 +371,32 @@ pub fn fit_sections(
             opts.lanczos
         )));
     }
-    let given = sections.len();
-    let (sections, notes) = section::normalize(sections)?;
-    let mut warnings = Vec::new();
-    if notes.merged_duplicates > 0 {
-        warnings.push(format!(
-            "{} section(s) given twice at one height were merged",
-            notes.merged_duplicates
-        ));
-    }
-    let k_all = sections.len();
+    Ok(())
+}
 
+/// What the fit uses: nodes around, the stride and the sections it keeps, the Lanczos order
+/// asked and the one the sections allow, and the tolerance's choice when one was given.
+struct Plan {
+    n: usize,
+    stride: usize,
+    used: Vec<Section>,
+    m_req: usize,
+    m: usize,
+    choice: Option<Choice>,
+}
+
+/// The plan for `sections` (normalized) under `opts`: the nodes, stride and order given, or
+/// chosen for the tolerance; refused when the stride does not divide the sections, fewer
+/// than 3 are kept, or the node points or the form's vertices would be too many.
+fn plan(
+    sections: &[Section],
+    opts: &FitOptions,
+    warnings: &mut Vec<String>,
+) -> Result<Plan, FitError> {
+    let k_all = sections.len();
     let (n, stride, m_req, choice) = match opts.tolerance {
         None => (opts.nodes_around, opts.stride, opts.lanczos, None),
-        Some(tol) => choose(&sections, tol, &mut warnings),
+        Some(tol) => choose(sections, tol, warnings),
     };
     if (k_all - 1) % stride != 0 {
         return Err(FitError::Options(format!(
@@ -376,19 +429,41 @@ pub fn fit_sections(
             lanczos::nodes_needed(m_req)
         ));
     }
-    let surface = surface::fit(&node_grid(&used, n), k, n, m);
-    let around = around_error(&used, n);
-    let (along, along_half) = along_error(&sections, n, stride, m);
+    Ok(Plan {
+        n,
+        stride,
+        used,
+        m_req,
+        m,
+        choice,
+    })
+}
+
+/// The error estimates of the plan: around (from the nodes), along (from the sections left
+/// out, at the plan's and at half its density), and their sum.
+fn estimate_error(sections: &[Section], plan: &Plan, warnings: &mut Vec<String>) -> ErrorEstimate {
+    let around = around_error(&plan.used, plan.n);
+    let (along, along_half) = along_error(sections, plan.n, plan.stride, plan.m);
     if along.is_none() {
         warnings.push("too few sections to estimate the error along the height".into());
     }
-    let estimated_error = ErrorEstimate {
+    ErrorEstimate {
         around,
         along,
         along_half_density: along_half,
         total: along.map(|a| a + around),
-    };
-    // Every section is a ring: the output passes through the nodes, where the girths are.
+    }
+}
+
+/// The form: the surface of `k` node rings tessellated (every section a ring, so the output
+/// passes through the nodes, where the girths are), with what it is; a warning when caps were
+/// asked and it is not closed.
+fn form(
+    surface: &surface::Surface,
+    k: usize,
+    opts: &FitOptions,
+    warnings: &mut Vec<String>,
+) -> (TriMesh, OutputInfo) {
     let per = (opts.along.max(2) - 1).div_ceil(k - 1);
     let along = (k - 1) * per + 1;
     let mesh = surface.tessellate(along, opts.around, opts.caps);
@@ -399,36 +474,16 @@ pub fn fit_sections(
             d.shell_state
         ));
     }
-    let girths = measure_girths(&mesh, targets);
-    let max_girth_deviation = girths.iter().map(|g| g.deviation.abs()).fold(0.0, f64::max);
-    let report = FitReport {
-        sections_given: given,
-        nodes_along: k,
-        stride,
-        nodes_around: n,
-        lanczos_requested: m_req,
-        lanczos: m,
-        estimated_error,
-        tolerance: choice,
-        girths,
-        max_girth_deviation,
-        output: OutputInfo {
-            along,
-            around: opts.around,
-            caps: opts.caps,
-            vertices: mesh.positions.len(),
-            faces: mesh.faces.len(),
-            shell_state: d.shell_state,
-            volume: d.total_volume,
-        },
-        sections: notes,
-        warnings,
+    let output = OutputInfo {
+        along,
+        around: opts.around,
+        caps: opts.caps,
+        vertices: mesh.positions.len(),
+        faces: mesh.faces.len(),
+        shell_state: d.shell_state,
+        volume: d.total_volume,
     };
-    Ok(Fitted {
-        mesh,
-        surface,
-        report,
-    })
+    (mesh, output)
 }
 
 /// The tolerance choice: (nodes around, stride, order, report).
