@@ -118,47 +118,77 @@ impl Plan {
 /// consistency is planned.
 pub fn plan(mesh: &TriMesh, topo: &Topology, outward: bool) -> Plan {
     let nf = mesh.faces.len();
-    let mut flip = vec![false; nf];
-    let mut label = vec![u32::MAX; nf];
-    let mut comps: Vec<ComponentInfo> = Vec::new();
-    let mut members: Vec<Vec<u32>> = Vec::new();
-    let mut queue = std::collections::VecDeque::new();
+    let mut w = Walk {
+        flip: vec![false; nf],
+        label: vec![u32::MAX; nf],
+        comps: Vec::new(),
+        members: Vec::new(),
+        queue: std::collections::VecDeque::new(),
+    };
     for seed in 0..nf {
-        if label[seed] != u32::MAX || is_index_degenerate(&mesh.faces[seed]) {
+        if w.label[seed] != u32::MAX || is_index_degenerate(&mesh.faces[seed]) {
             continue;
         }
-        let c = comps.len() as u32;
+        w.component(mesh, topo, seed);
+    }
+    let non_manifold_edges = w.closedness(mesh, topo);
+    w.face_outward(mesh, outward);
+    Plan {
+        flip: w.flip,
+        label: w.label,
+        components: w.comps,
+        non_manifold_edges,
+    }
+}
+
+/// The plan being made: the flips and labels so far, the components found and their faces.
+struct Walk {
+    flip: Vec<bool>,
+    label: Vec<u32>,
+    comps: Vec<ComponentInfo>,
+    /// Per component, its faces in the order the walk met them.
+    members: Vec<Vec<u32>>,
+    /// The faces met but not yet walked from.
+    queue: std::collections::VecDeque<usize>,
+}
+
+impl Walk {
+    /// Walks the component of face `seed` breadth-first through manifold edges, flipping each
+    /// face that runs a shared edge the same way as its neighbour, then keeps the winding most
+    /// of its faces have (ties: the seed's).
+    fn component(&mut self, mesh: &TriMesh, topo: &Topology, seed: usize) {
+        let c = self.comps.len() as u32;
         let mut list = vec![seed as u32];
         let mut orientable = true;
-        label[seed] = c;
-        queue.push_back(seed);
-        while let Some(f) = queue.pop_front() {
+        self.label[seed] = c;
+        self.queue.push_back(seed);
+        while let Some(f) = self.queue.pop_front() {
             for i in 0..3 {
                 let h = f * 3 + i;
                 if !topo.is_manifold(h) {
                     continue;
                 }
                 let g = topo.opp[h] as usize / 3;
-                let want = flip[f] ^ topo.same_direction(mesh, h);
-                if label[g] == u32::MAX {
-                    label[g] = c;
-                    flip[g] = want;
+                let want = self.flip[f] ^ topo.same_direction(mesh, h);
+                if self.label[g] == u32::MAX {
+                    self.label[g] = c;
+                    self.flip[g] = want;
                     list.push(g as u32);
-                    queue.push_back(g);
-                } else if flip[g] != want {
+                    self.queue.push_back(g);
+                } else if self.flip[g] != want {
                     orientable = false;
                 }
             }
         }
         // Follow the winding most of the component's faces have (ties: the lowest face's).
-        let mut inconsistent = list.iter().filter(|&&f| flip[f as usize]).count();
+        let mut inconsistent = list.iter().filter(|&&f| self.flip[f as usize]).count();
         if 2 * inconsistent > list.len() {
             for &f in &list {
-                flip[f as usize] = !flip[f as usize];
+                self.flip[f as usize] = !self.flip[f as usize];
             }
             inconsistent = list.len() - inconsistent;
         }
-        comps.push(ComponentInfo {
+        self.comps.push(ComponentInfo {
             faces: list.len(),
             first_face: seed,
             closed: true,
@@ -169,85 +199,90 @@ pub fn plan(mesh: &TriMesh, topo: &Topology, outward: bool) -> Plan {
             inverted: false,
             undecided: false,
         });
-        members.push(list);
+        self.members.push(list);
     }
 
-    // Closedness: no boundary half-edge; each non-manifold edge used twice, oppositely, per component.
-    let mut nm: Vec<(u32, u32, u32, i8)> = Vec::new();
-    let mut nm_edges: Vec<(u32, u32)> = Vec::new();
-    for f in 0..nf {
-        let c = label[f];
-        if c == u32::MAX {
-            continue;
-        }
-        for i in 0..3 {
-            let h = f * 3 + i;
-            match topo.opp[h] {
-                o if o < NON_MANIFOLD => {}
-                NON_MANIFOLD => {
-                    let mut a = mesh.faces[f][i];
-                    let mut b = mesh.faces[f][(i + 1) % 3];
-                    if flip[f] {
-                        std::mem::swap(&mut a, &mut b);
+    /// Marks the components that are open (a boundary half-edge, or a non-manifold edge not
+    /// used by exactly two of their faces) or non-orientable (a non-manifold edge used twice
+    /// the same way); returns the number of distinct non-manifold edges.
+    fn closedness(&mut self, mesh: &TriMesh, topo: &Topology) -> usize {
+        let mut nm: Vec<(u32, u32, u32, i8)> = Vec::new();
+        let mut nm_edges: Vec<(u32, u32)> = Vec::new();
+        for f in 0..mesh.faces.len() {
+            let c = self.label[f];
+            if c == u32::MAX {
+                continue;
+            }
+            for i in 0..3 {
+                let h = f * 3 + i;
+                match topo.opp[h] {
+                    o if o < NON_MANIFOLD => {}
+                    NON_MANIFOLD => {
+                        let mut a = mesh.faces[f][i];
+                        let mut b = mesh.faces[f][(i + 1) % 3];
+                        if self.flip[f] {
+                            std::mem::swap(&mut a, &mut b);
+                        }
+                        let dir = if a < b { 1 } else { -1 };
+                        nm.push((c, a.min(b), a.max(b), dir));
+                        nm_edges.push((a.min(b), a.max(b)));
                     }
-                    let dir = if a < b { 1 } else { -1 };
-                    nm.push((c, a.min(b), a.max(b), dir));
-                    nm_edges.push((a.min(b), a.max(b)));
+                    _ => self.comps[c as usize].closed = false,
                 }
-                _ => comps[c as usize].closed = false,
             }
         }
-    }
-    nm.sort_unstable();
-    for group in nm.chunk_by(|x, y| (x.0, x.1, x.2) == (y.0, y.1, y.2)) {
-        let c = group[0].0 as usize;
-        let sum: i32 = group.iter().map(|g| i32::from(g.3)).sum();
-        if group.len() != 2 {
-            comps[c].closed = false;
-        } else if sum != 0 {
-            comps[c].orientable = false;
+        nm.sort_unstable();
+        for group in nm.chunk_by(|x, y| (x.0, x.1, x.2) == (y.0, y.1, y.2)) {
+            let c = group[0].0 as usize;
+            let sum: i32 = group.iter().map(|g| i32::from(g.3)).sum();
+            if group.len() != 2 {
+                self.comps[c].closed = false;
+            } else if sum != 0 {
+                self.comps[c].orientable = false;
+            }
         }
+        nm_edges.sort_unstable();
+        nm_edges.dedup();
+        nm_edges.len()
     }
-    nm_edges.sort_unstable();
-    nm_edges.dedup();
 
-    let bbox = mesh.bbox();
-    let d = bbox.map_or(0.0, |b| b.diagonal());
-    let origin = bbox.map_or(Point3::origin(), |b| b.center());
-    for (c, info) in comps.iter_mut().enumerate() {
-        let list = &members[c];
-        if info.closed {
-            let v = signed_volume(mesh, list, &flip, origin);
-            info.volume = Some(v);
-            if outward && info.orientable {
-                if v.abs() <= tol::FLAT_VOLUME_REL * d * d * d {
-                    info.undecided = true;
-                } else {
-                    info.inverted = v < 0.0;
+    /// Measures each component (signed volume when closed, mean winding number when open)
+    /// and, with `outward`, decides whether an orientable one is flipped whole or undecided.
+    fn face_outward(&mut self, mesh: &TriMesh, outward: bool) {
+        let bbox = mesh.bbox();
+        let d = bbox.map_or(0.0, |b| b.diagonal());
+        let origin = bbox.map_or(Point3::origin(), |b| b.center());
+        for (c, info) in self.comps.iter_mut().enumerate() {
+            let list = &self.members[c];
+            if info.closed {
+                let v = signed_volume(mesh, list, &self.flip, origin);
+                info.volume = Some(v);
+                if outward && info.orientable {
+                    decide(info, v, tol::FLAT_VOLUME_REL * d * d * d);
+                }
+            } else {
+                let w = mean_winding(mesh, list, &self.flip);
+                info.winding = Some(w);
+                if outward && info.orientable {
+                    decide(info, w, tol::WINDING_TIE);
                 }
             }
-        } else {
-            let w = mean_winding(mesh, list, &flip);
-            info.winding = Some(w);
-            if outward && info.orientable {
-                if w.abs() <= tol::WINDING_TIE {
-                    info.undecided = true;
-                } else {
-                    info.inverted = w < 0.0;
+            if info.inverted {
+                for &f in list {
+                    self.flip[f as usize] = !self.flip[f as usize];
                 }
-            }
-        }
-        if info.inverted {
-            for &f in list {
-                flip[f as usize] = !flip[f as usize];
             }
         }
     }
-    Plan {
-        flip,
-        label,
-        components: comps,
-        non_manifold_edges: nm_edges.len(),
+}
+
+/// A component whose `measure` (volume or winding) is within `tie` of zero is undecided;
+/// otherwise it is inverted when the measure is negative.
+fn decide(info: &mut ComponentInfo, measure: f64, tie: f64) {
+    if measure.abs() <= tie {
+        info.undecided = true;
+    } else {
+        info.inverted = measure < 0.0;
     }
 }
 
