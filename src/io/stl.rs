@@ -192,184 +192,214 @@ impl<'a> Tokens<'a> {
     }
 }
 
+/// The name of ASCII STL in messages.
+const ASCII_FMT: &str = "ASCII STL";
+
+/// Reads ASCII STL: each `solid` block in turn, then the mesh.
 fn read_ascii(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<ReadOutput, IoError> {
-    const FMT: &str = "ASCII STL";
-    let text = text::decode(bytes)
-        .map_err(|reason| malformed(path, FMT, Location::File, ProblemKind::Encoding { reason }))?;
-    let mut tk = Tokens {
-        text: &text,
-        pos: 0,
-        line: 1,
-    };
-    let err = |line: u64, kind: ProblemKind| malformed(path, FMT, Location::Line(line), kind);
-    let expect_word = |tk: &mut Tokens, word: &str| -> Result<u64, IoError> {
-        match tk.next() {
-            Some((t, l)) if t.eq_ignore_ascii_case(word.as_bytes()) => Ok(l),
-            Some((t, l)) => Err(err(
-                l,
-                ProblemKind::Expected {
-                    expected: format!("'{word}'"),
-                    found: show(t),
-                },
-            )),
-            None => Err(err(
-                tk.line,
-                ProblemKind::UnexpectedEof {
-                    expected: format!("'{word}'"),
-                },
-            )),
+    let text = text::decode(bytes).map_err(|reason| {
+        malformed(
+            path,
+            ASCII_FMT,
+            Location::File,
+            ProblemKind::Encoding { reason },
+        )
+    })?;
+    let mut r = AsciiReader::new(path, &text);
+    while r.solid_start()? {
+        if !r.solid_body()? {
+            break;
         }
-    };
-    let mut ix = ExactIndexer::with_capacity(1024);
-    let mut polys = Polygons::default();
-    let mut solids = 0usize;
-    let mut warnings = Vec::new();
-    let mut nan_normals = 0usize;
-    'solids: loop {
-        match tk.next() {
-            None => break,
+    }
+    Ok(r.finish(opts))
+}
+
+/// The state of an ASCII STL read: the tokens left, the points and polygons so far, the counts.
+struct AsciiReader<'a> {
+    path: &'a Path,
+    tk: Tokens<'a>,
+    ix: ExactIndexer,
+    polys: Polygons,
+    solids: usize,
+    nan_normals: usize,
+    warnings: Vec<String>,
+}
+
+impl<'a> AsciiReader<'a> {
+    /// A reader at the start of `text`.
+    fn new(path: &'a Path, text: &'a [u8]) -> AsciiReader<'a> {
+        AsciiReader {
+            path,
+            tk: Tokens {
+                text,
+                pos: 0,
+                line: 1,
+            },
+            ix: ExactIndexer::with_capacity(1024),
+            polys: Polygons::default(),
+            solids: 0,
+            nan_normals: 0,
+            warnings: Vec::new(),
+        }
+    }
+
+    /// The error `kind` at `line`.
+    fn err(&self, line: u64, kind: ProblemKind) -> IoError {
+        malformed(self.path, ASCII_FMT, Location::Line(line), kind)
+    }
+
+    /// The error of finding `found` at `line` where `expected` should be.
+    fn expected(&self, line: u64, expected: &str, found: &[u8]) -> IoError {
+        let kind = ProblemKind::Expected {
+            expected: expected.into(),
+            found: show(found),
+        };
+        self.err(line, kind)
+    }
+
+    /// The next token and its line; the file ending is an error naming what was `expected`.
+    fn next_or(&mut self, expected: &str) -> Result<(&'a [u8], u64), IoError> {
+        self.tk.next().ok_or_else(|| {
+            let kind = ProblemKind::UnexpectedEof {
+                expected: expected.into(),
+            };
+            self.err(self.tk.line, kind)
+        })
+    }
+
+    /// Reads the keyword `word` (any case).
+    fn expect_word(&mut self, word: &str) -> Result<(), IoError> {
+        let expected = format!("'{word}'");
+        match self.next_or(&expected)? {
+            (t, _) if t.eq_ignore_ascii_case(word.as_bytes()) => Ok(()),
+            (t, l) => Err(self.expected(l, &expected, t)),
+        }
+    }
+
+    /// Reads the `solid` line that opens a block; false at the end of the file.
+    fn solid_start(&mut self) -> Result<bool, IoError> {
+        match self.tk.next() {
+            None => Ok(false),
             Some((t, _)) if t.eq_ignore_ascii_case(b"solid") => {
-                tk.skip_line();
-                solids += 1;
+                self.tk.skip_line();
+                self.solids += 1;
+                Ok(true)
             }
-            Some((t, l)) => {
-                return Err(err(
-                    l,
-                    ProblemKind::Expected {
-                        expected: "'solid'".into(),
-                        found: show(t),
-                    },
-                ))
-            }
+            Some((t, l)) => Err(self.expected(l, "'solid'", t)),
         }
+    }
+
+    /// Reads a block's facets and its `endsolid` line; false (with a warning) when the file
+    /// ends before `endsolid`.
+    fn solid_body(&mut self) -> Result<bool, IoError> {
         loop {
-            let Some((t, l)) = tk.next() else {
-                warnings.push(format!(
-                    "solid {solids} has no 'endsolid' before the end of the file"
+            let Some((t, l)) = self.tk.next() else {
+                self.warnings.push(format!(
+                    "solid {} has no 'endsolid' before the end of the file",
+                    self.solids
                 ));
-                break 'solids;
+                return Ok(false);
             };
             if t.eq_ignore_ascii_case(b"endsolid") {
-                tk.skip_line();
-                break;
+                self.tk.skip_line();
+                return Ok(true);
             }
             if !t.eq_ignore_ascii_case(b"facet") {
-                return Err(err(
-                    l,
-                    ProblemKind::Expected {
-                        expected: "'facet' or 'endsolid'".into(),
-                        found: show(t),
-                    },
-                ));
+                return Err(self.expected(l, "'facet' or 'endsolid'", t));
             }
-            // `normal nx ny nz` (optional), values not used.
-            let (mut t, mut l) = tk.next().ok_or_else(|| {
-                err(
-                    tk.line,
-                    ProblemKind::UnexpectedEof {
-                        expected: "'outer loop'".into(),
-                    },
-                )
-            })?;
-            if t.eq_ignore_ascii_case(b"normal") {
-                let mut finite = true;
-                for _ in 0..3 {
-                    let (v, vl) = tk.next().ok_or_else(|| {
-                        err(
-                            tk.line,
-                            ProblemKind::UnexpectedEof {
-                                expected: "a normal component".into(),
-                            },
-                        )
-                    })?;
-                    match text::number(v) {
-                        Ok(_) => {}
-                        Err(ProblemKind::NonFinite { .. }) => finite = false,
-                        Err(k) => return Err(err(vl, k)),
-                    }
-                }
-                nan_normals += usize::from(!finite);
-                (t, l) = tk.next().ok_or_else(|| {
-                    err(
-                        tk.line,
-                        ProblemKind::UnexpectedEof {
-                            expected: "'outer loop'".into(),
-                        },
-                    )
-                })?;
-            }
-            if !t.eq_ignore_ascii_case(b"outer") {
-                return Err(err(
-                    l,
-                    ProblemKind::Expected {
-                        expected: "'outer loop'".into(),
-                        found: show(t),
-                    },
-                ));
-            }
-            expect_word(&mut tk, "loop")?;
-            let mut ring = Vec::with_capacity(3);
-            loop {
-                let (t, l) = tk.next().ok_or_else(|| {
-                    err(
-                        tk.line,
-                        ProblemKind::UnexpectedEof {
-                            expected: "'vertex' or 'endloop'".into(),
-                        },
-                    )
-                })?;
-                if t.eq_ignore_ascii_case(b"endloop") {
-                    if ring.len() < 3 {
-                        return Err(err(l, ProblemKind::TooFewCorners { found: ring.len() }));
-                    }
-                    break;
-                }
-                if !t.eq_ignore_ascii_case(b"vertex") {
-                    return Err(err(
-                        l,
-                        ProblemKind::Expected {
-                            expected: "'vertex' or 'endloop'".into(),
-                            found: show(t),
-                        },
-                    ));
-                }
-                let mut p = [0.0; 3];
-                for c in &mut p {
-                    let (v, vl) = tk.next().ok_or_else(|| {
-                        err(
-                            tk.line,
-                            ProblemKind::UnexpectedEof {
-                                expected: "a vertex coordinate".into(),
-                            },
-                        )
-                    })?;
-                    *c = text::coordinate(v).map_err(|k| err(vl, k))?;
-                }
-                ring.push(ix.index(Point3::new(p[0], p[1], p[2])));
-            }
-            expect_word(&mut tk, "endfacet")?;
-            polys.push(ring);
+            self.facet()?;
         }
     }
-    if nan_normals > 0 {
-        warnings.push(format!("{nan_normals} facet normal(s) are not finite (ignored: the winding defines the normal)"));
+
+    /// Reads one facet after its `facet` keyword: the optional normal, `outer loop`, the loop's
+    /// vertices and `endfacet`; the loop becomes a polygon.
+    fn facet(&mut self) -> Result<(), IoError> {
+        let (mut t, mut l) = self.next_or("'outer loop'")?;
+        if t.eq_ignore_ascii_case(b"normal") {
+            self.normal()?;
+            (t, l) = self.next_or("'outer loop'")?;
+        }
+        if !t.eq_ignore_ascii_case(b"outer") {
+            return Err(self.expected(l, "'outer loop'", t));
+        }
+        self.expect_word("loop")?;
+        let ring = self.ring()?;
+        self.expect_word("endfacet")?;
+        self.polys.push(ring);
+        Ok(())
     }
-    let positions = ix.into_positions();
-    let (faces, stats) = polys.triangulate(&positions, opts.quad_split);
-    let info = ReadInfo {
-        format: "stl-ascii".into(),
-        vertices_in_file: positions.len(),
-        points: Some(polys.corner_count()),
-        solids: Some(solids),
-        polygons: stats,
-        warnings,
-        ..ReadInfo::default()
-    };
-    Ok(ReadOutput {
-        texcoords: None,
-        mesh: TriMesh::new(positions, faces),
-        info,
-    })
+
+    /// Reads the three components after `normal`: they must be numbers, their values are not
+    /// used; a normal with a component that is not finite is counted.
+    fn normal(&mut self) -> Result<(), IoError> {
+        let mut finite = true;
+        for _ in 0..3 {
+            let (v, vl) = self.next_or("a normal component")?;
+            match text::number(v) {
+                Ok(_) => {}
+                Err(ProblemKind::NonFinite { .. }) => finite = false,
+                Err(k) => return Err(self.err(vl, k)),
+            }
+        }
+        self.nan_normals += usize::from(!finite);
+        Ok(())
+    }
+
+    /// Reads a loop's `vertex` lines up to `endloop` (at least three); returns their indices.
+    fn ring(&mut self) -> Result<Vec<u32>, IoError> {
+        let mut ring = Vec::with_capacity(3);
+        loop {
+            let (t, l) = self.next_or("'vertex' or 'endloop'")?;
+            if t.eq_ignore_ascii_case(b"endloop") {
+                if ring.len() < 3 {
+                    return Err(self.err(l, ProblemKind::TooFewCorners { found: ring.len() }));
+                }
+                return Ok(ring);
+            }
+            if !t.eq_ignore_ascii_case(b"vertex") {
+                return Err(self.expected(l, "'vertex' or 'endloop'", t));
+            }
+            let p = self.vertex()?;
+            ring.push(self.ix.index(p));
+        }
+    }
+
+    /// Reads the three finite coordinates after `vertex`.
+    fn vertex(&mut self) -> Result<Point3, IoError> {
+        let mut p = [0.0; 3];
+        for c in &mut p {
+            let (v, vl) = self.next_or("a vertex coordinate")?;
+            *c = text::coordinate(v).map_err(|k| self.err(vl, k))?;
+        }
+        Ok(Point3::new(p[0], p[1], p[2]))
+    }
+
+    /// The mesh (polygons triangulated) and the report, with the warning about non-finite
+    /// normals last.
+    fn finish(mut self, opts: &ReadOptions) -> ReadOutput {
+        if self.nan_normals > 0 {
+            self.warnings.push(format!(
+                "{} facet normal(s) are not finite (ignored: the winding defines the normal)",
+                self.nan_normals
+            ));
+        }
+        let positions = self.ix.into_positions();
+        let (faces, stats) = self.polys.triangulate(&positions, opts.quad_split);
+        let info = ReadInfo {
+            format: "stl-ascii".into(),
+            vertices_in_file: positions.len(),
+            points: Some(self.polys.corner_count()),
+            solids: Some(self.solids),
+            polygons: stats,
+            warnings: self.warnings,
+            ..ReadInfo::default()
+        };
+        ReadOutput {
+            texcoords: None,
+            mesh: TriMesh::new(positions, faces),
+            info,
+        }
+    }
 }
 
 /// Unit normal of a face from its winding (zero when degenerate).
