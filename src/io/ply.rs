@@ -125,36 +125,26 @@ struct Header {
     warnings: Vec<String>,
 }
 
-fn parse_header(bytes: &[u8]) -> Result<Header, (Location, ProblemKind)> {
-    let mut pos = 0usize;
-    let mut line_no = 0u64;
-    let mut next_line = |pos: &mut usize| -> Option<(u64, &[u8])> {
-        if *pos >= bytes.len() {
-            return None;
-        }
-        let rest = &bytes[*pos..];
-        let end = rest.iter().position(|&b| b == b'\n');
-        let (line, adv) = match end {
-            Some(e) => (&rest[..e], e + 1),
-            None => (rest, rest.len()),
-        };
-        *pos += adv;
-        line_no += 1;
-        Some((line_no, line.strip_suffix(b"\r").unwrap_or(line)))
+/// A header problem: where, and what.
+type HeaderError = (Location, ProblemKind);
+
+/// Parses the header: the magic line, then its lines up to `end_header`; a format line is
+/// required.
+fn parse_header(bytes: &[u8]) -> Result<Header, HeaderError> {
+    let mut lines = HeaderLines {
+        bytes,
+        pos: 0,
+        line_no: 0,
     };
-    match next_line(&mut pos) {
+    match lines.next_line() {
         Some((_, l)) if l.trim_ascii() == b"ply" => {}
         _ => return Err((Location::Line(1), ProblemKind::PlyMagic)),
     }
     let mut encoding = None;
     let mut elements: Vec<Element> = Vec::new();
     let mut warnings = Vec::new();
-    let header_err = |l: &[u8], reason: &str| ProblemKind::PlyHeader {
-        line: show(l),
-        reason: reason.into(),
-    };
     loop {
-        let Some((ln, line)) = next_line(&mut pos) else {
+        let Some((ln, line)) = lines.next_line() else {
             return Err((Location::File, ProblemKind::PlyNoEnd));
         };
         let w: Vec<&[u8]> = text::words(line).collect();
@@ -162,88 +152,9 @@ fn parse_header(bytes: &[u8]) -> Result<Header, (Location, ProblemKind)> {
             None => {}
             Some(b"end_header") => break,
             Some(b"comment") | Some(b"obj_info") => {}
-            Some(b"format") => {
-                encoding = Some(match (w.get(1).copied(), w.get(2).copied()) {
-                    (Some(b"ascii"), Some(b"1.0")) => Encoding::Ascii,
-                    (Some(b"binary_little_endian"), Some(b"1.0")) => Encoding::Little,
-                    (Some(b"binary_big_endian"), Some(b"1.0")) => Encoding::Big,
-                    _ => {
-                        return Err((
-                            Location::Line(ln),
-                            ProblemKind::PlyFormat { found: show(line) },
-                        ))
-                    }
-                });
-            }
-            Some(b"element") => {
-                if w.len() != 3 {
-                    return Err((
-                        Location::Line(ln),
-                        header_err(line, "expected 'element NAME COUNT'"),
-                    ));
-                }
-                let count = std::str::from_utf8(w[2])
-                    .ok()
-                    .and_then(|s| s.parse::<u64>().ok());
-                let Some(count) = count else {
-                    return Err((
-                        Location::Line(ln),
-                        header_err(line, "the element count is not a whole number"),
-                    ));
-                };
-                elements.push(Element {
-                    name: String::from_utf8_lossy(w[1]).into_owned(),
-                    count,
-                    props: Vec::new(),
-                });
-            }
-            Some(b"property") => {
-                let Some(el) = elements.last_mut() else {
-                    return Err((
-                        Location::Line(ln),
-                        header_err(line, "a property before any element"),
-                    ));
-                };
-                let (ty, name) = if w.get(1).copied() == Some(b"list") {
-                    if w.len() != 5 {
-                        return Err((
-                            Location::Line(ln),
-                            header_err(line, "expected 'property list COUNT_TYPE ITEM_TYPE NAME'"),
-                        ));
-                    }
-                    let c = Scalar::parse(w[2]).ok_or((
-                        Location::Line(ln),
-                        ProblemKind::PlyType { found: show(w[2]) },
-                    ))?;
-                    let i = Scalar::parse(w[3]).ok_or((
-                        Location::Line(ln),
-                        ProblemKind::PlyType { found: show(w[3]) },
-                    ))?;
-                    if c.is_float() {
-                        return Err((
-                            Location::Line(ln),
-                            header_err(line, "a list count must have an integer type"),
-                        ));
-                    }
-                    (PropType::List(c, i), w[4])
-                } else {
-                    if w.len() != 3 {
-                        return Err((
-                            Location::Line(ln),
-                            header_err(line, "expected 'property TYPE NAME'"),
-                        ));
-                    }
-                    let t = Scalar::parse(w[1]).ok_or((
-                        Location::Line(ln),
-                        ProblemKind::PlyType { found: show(w[1]) },
-                    ))?;
-                    (PropType::Scalar(t), w[2])
-                };
-                el.props.push(Property {
-                    name: String::from_utf8_lossy(name).into_owned(),
-                    ty,
-                });
-            }
+            Some(b"format") => encoding = Some(format_line(ln, line, &w)?),
+            Some(b"element") => elements.push(element_line(ln, line, &w)?),
+            Some(b"property") => property_line(ln, line, &w, elements.last_mut())?,
             Some(_) => warnings.push(format!(
                 "header line {ln} skipped: '{}' is not a PLY header keyword",
                 show(line)
@@ -261,10 +172,125 @@ fn parse_header(bytes: &[u8]) -> Result<Header, (Location, ProblemKind)> {
     Ok(Header {
         encoding,
         elements,
-        body: pos,
-        lines: line_no,
+        body: lines.pos,
+        lines: lines.line_no,
         warnings,
     })
+}
+
+/// The header's lines, numbered from 1, without their LF or CRLF.
+struct HeaderLines<'a> {
+    bytes: &'a [u8],
+    /// Where the next line starts.
+    pos: usize,
+    /// The number of the line last read.
+    line_no: u64,
+}
+
+impl<'a> HeaderLines<'a> {
+    /// The next line and its number; `None` at the end of the bytes.
+    fn next_line(&mut self) -> Option<(u64, &'a [u8])> {
+        if self.pos >= self.bytes.len() {
+            return None;
+        }
+        let rest = &self.bytes[self.pos..];
+        let end = rest.iter().position(|&b| b == b'\n');
+        let (line, adv) = match end {
+            Some(e) => (&rest[..e], e + 1),
+            None => (rest, rest.len()),
+        };
+        self.pos += adv;
+        self.line_no += 1;
+        Some((self.line_no, line.strip_suffix(b"\r").unwrap_or(line)))
+    }
+}
+
+/// The header error at line `ln` (whose text is `line`) for `reason`.
+fn header_err(ln: u64, line: &[u8], reason: &str) -> HeaderError {
+    let kind = ProblemKind::PlyHeader {
+        line: show(line),
+        reason: reason.into(),
+    };
+    (Location::Line(ln), kind)
+}
+
+/// The encoding a `format` line (line `ln`, split into the words `w`) names, version 1.0.
+fn format_line(ln: u64, line: &[u8], w: &[&[u8]]) -> Result<Encoding, HeaderError> {
+    match (w.get(1).copied(), w.get(2).copied()) {
+        (Some(b"ascii"), Some(b"1.0")) => Ok(Encoding::Ascii),
+        (Some(b"binary_little_endian"), Some(b"1.0")) => Ok(Encoding::Little),
+        (Some(b"binary_big_endian"), Some(b"1.0")) => Ok(Encoding::Big),
+        _ => Err((
+            Location::Line(ln),
+            ProblemKind::PlyFormat { found: show(line) },
+        )),
+    }
+}
+
+/// The element an `element NAME COUNT` line declares, without properties yet.
+fn element_line(ln: u64, line: &[u8], w: &[&[u8]]) -> Result<Element, HeaderError> {
+    if w.len() != 3 {
+        return Err(header_err(ln, line, "expected 'element NAME COUNT'"));
+    }
+    let count = std::str::from_utf8(w[2])
+        .ok()
+        .and_then(|s| s.parse::<u64>().ok());
+    let Some(count) = count else {
+        return Err(header_err(
+            ln,
+            line,
+            "the element count is not a whole number",
+        ));
+    };
+    Ok(Element {
+        name: String::from_utf8_lossy(w[1]).into_owned(),
+        count,
+        props: Vec::new(),
+    })
+}
+
+/// Adds the property a `property` line declares (scalar or list) to `el`, the element
+/// declared last (an error when there is none yet).
+fn property_line(
+    ln: u64,
+    line: &[u8],
+    w: &[&[u8]],
+    el: Option<&mut Element>,
+) -> Result<(), HeaderError> {
+    let Some(el) = el else {
+        return Err(header_err(ln, line, "a property before any element"));
+    };
+    let (ty, name) = if w.get(1).copied() == Some(b"list") {
+        if w.len() != 5 {
+            let reason = "expected 'property list COUNT_TYPE ITEM_TYPE NAME'";
+            return Err(header_err(ln, line, reason));
+        }
+        let c = scalar_type(ln, w[2])?;
+        let i = scalar_type(ln, w[3])?;
+        if c.is_float() {
+            let reason = "a list count must have an integer type";
+            return Err(header_err(ln, line, reason));
+        }
+        (PropType::List(c, i), w[4])
+    } else {
+        if w.len() != 3 {
+            return Err(header_err(ln, line, "expected 'property TYPE NAME'"));
+        }
+        (PropType::Scalar(scalar_type(ln, w[1])?), w[2])
+    };
+    el.props.push(Property {
+        name: String::from_utf8_lossy(name).into_owned(),
+        ty,
+    });
+    Ok(())
+}
+
+/// The scalar type named by `word` on line `ln`.
+fn scalar_type(ln: u64, word: &[u8]) -> Result<Scalar, HeaderError> {
+    Scalar::parse(word).ok_or((
+        Location::Line(ln),
+        ProblemKind::PlyType { found: show(word) },
+    ))
 }
 
 /// The roles of an element's properties for geometry.
