@@ -51,59 +51,116 @@ pub fn read_from(
     reader: impl BufRead,
     opts: &ReadOptions,
 ) -> Result<ReadOutput, IoError> {
-    let mut problems = Problems::default();
-    let mut items: Vec<Item> = Vec::new();
-    let mut current: Option<Block> = None;
-    let mut nums: Vec<f64> = Vec::with_capacity(12);
-    let mut face_lines = 0usize;
-    let mut point_lines = 0usize;
+    let scan = scan_lines(path, reader)?;
+    // Layout problems would only echo the lines already reported: stop here if there are any.
+    scan.problems.check(path, FORMAT)?;
+    let block_mode = is_block_mode(&scan.items);
+    layout_problems(&scan.items, block_mode).check(path, FORMAT)?;
+    let total_points: usize = scan.point_lines
+        + scan
+            .items
+            .iter()
+            .map(|i| if let Item::Face(p) = i { p.len() } else { 0 })
+            .sum::<usize>();
+    let (positions, polys) = polygons(&scan.items, block_mode, total_points);
+    let (faces, stats) = polys.triangulate(&positions, opts.quad_split);
+    let layout = layout_name(scan.point_lines > 0, scan.face_lines > 0, block_mode);
+    let info = ReadInfo {
+        format: FORMAT.into(),
+        layout: Some(layout.into()),
+        points: Some(total_points),
+        vertices_in_file: positions.len(),
+        polygons: stats,
+        ..ReadInfo::default()
+    };
+    Ok(ReadOutput {
+        texcoords: None,
+        mesh: TriMesh::new(positions, faces),
+        info,
+    })
+}
+
+/// What the pass over the lines found: the blocks and faces in file order, and the problems
+/// of the lines.
+struct Scan {
+    problems: Problems,
+    items: Vec<Item>,
+    /// The block of point lines being read.
+    current: Option<Block>,
+    /// The numbers of the line being read.
+    nums: Vec<f64>,
+    face_lines: usize,
+    point_lines: usize,
+}
+
+/// Reads every line of `reader` into a [`Scan`].
+fn scan_lines(path: &Path, reader: impl BufRead) -> Result<Scan, IoError> {
+    let mut scan = Scan {
+        problems: Problems::default(),
+        items: Vec::new(),
+        current: None,
+        nums: Vec::with_capacity(12),
+        face_lines: 0,
+        point_lines: 0,
+    };
     let mut lines = text::LineReader::new(reader);
     let io = text::line_error(path, FORMAT);
     while let Some((ln, line)) = lines.next_line().map_err(io)? {
-        let trimmed = line.trim_ascii();
+        scan.line(ln, line.trim_ascii());
+    }
+    scan.end_block();
+    Ok(scan)
+}
+
+impl Scan {
+    /// Takes in line `ln` (trimmed): a blank line ends a block, a comment is skipped, 3 numbers
+    /// are a point, 9 or 12 a face; any other count of numbers is a problem.
+    fn line(&mut self, ln: u64, trimmed: &[u8]) {
         if trimmed.is_empty() {
-            if let Some(b) = current.take() {
-                items.push(Item::Block(b));
-            }
-            continue;
+            self.end_block();
+            return;
         }
         if trimmed[0] == b';' || trimmed[0] == b'#' {
-            continue;
+            return;
         }
-        nums.clear();
-        if let Err(kind) = numbers_of(trimmed, &mut nums) {
-            problems.line(ln, kind);
-            continue;
+        self.nums.clear();
+        if let Err(kind) = numbers_of(trimmed, &mut self.nums) {
+            self.problems.line(ln, kind);
+            return;
         }
-        match nums.len() {
+        match self.nums.len() {
             0 => {}
             3 => {
-                point_lines += 1;
-                current
+                self.point_lines += 1;
+                let p = Point3::new(self.nums[0], self.nums[1], self.nums[2]);
+                self.current
                     .get_or_insert_with(|| Block { points: Vec::new() })
                     .points
-                    .push((ln, Point3::new(nums[0], nums[1], nums[2])));
+                    .push((ln, p));
             }
             9 | 12 => {
-                face_lines += 1;
-                if let Some(b) = current.take() {
-                    items.push(Item::Block(b));
-                }
-                items.push(Item::Face(
-                    nums.chunks_exact(3)
-                        .map(|c| Point3::new(c[0], c[1], c[2]))
-                        .collect(),
-                ));
+                self.face_lines += 1;
+                self.end_block();
+                let points = self.nums.chunks_exact(3);
+                let face = points.map(|c| Point3::new(c[0], c[1], c[2])).collect();
+                self.items.push(Item::Face(face));
             }
-            n => problems.line(ln, ProblemKind::TriplesNumberCount { found: n }),
+            n => self
+                .problems
+                .line(ln, ProblemKind::TriplesNumberCount { found: n }),
         }
     }
-    if let Some(b) = current.take() {
-        items.push(Item::Block(b));
-    }
-    // Layout problems would only echo the lines already reported: stop here if there are any.
-    std::mem::take(&mut problems).check(path, FORMAT)?;
 
+    /// Ends the block being read, if any.
+    fn end_block(&mut self) {
+        if let Some(b) = self.current.take() {
+            self.items.push(Item::Block(b));
+        }
+    }
+}
+
+/// Whether every block is a face: several blocks, most of them of 3 or 4 points.
+fn is_block_mode(items: &[Item]) -> bool {
     let sizes: Vec<usize> = items
         .iter()
         .filter_map(|i| match i {
@@ -112,8 +169,14 @@ pub fn read_from(
         })
         .collect();
     let face_like = sizes.iter().filter(|&&s| s == 3 || s == 4).count();
-    let block_mode = sizes.len() > 1 && 2 * face_like > sizes.len();
-    for item in &items {
+    sizes.len() > 1 && 2 * face_like > sizes.len()
+}
+
+/// The blocks that do not fit the layout: in block mode those not of 3 or 4 points, else
+/// those whose points are not whole triangles (at the first leftover point).
+fn layout_problems(items: &[Item], block_mode: bool) -> Problems {
+    let mut problems = Problems::default();
+    for item in items {
         if let Item::Block(b) = item {
             let n = b.points.len();
             let first = b.points[0].0;
@@ -135,16 +198,15 @@ pub fn read_from(
             }
         }
     }
-    problems.check(path, FORMAT)?;
+    problems
+}
 
-    let total_points: usize = point_lines
-        + items
-            .iter()
-            .map(|i| if let Item::Face(p) = i { p.len() } else { 0 })
-            .sum::<usize>();
+/// The distinct points (by exact equality) and the polygons over them, in file order: each
+/// face, each block in block mode, else each three points of a block.
+fn polygons(items: &[Item], block_mode: bool, total_points: usize) -> (Vec<Point3>, Polygons) {
     let mut ix = ExactIndexer::with_capacity(total_points / 2 + 8);
     let mut polys = Polygons::with_capacity(total_points / 3);
-    for item in &items {
+    for item in items {
         match item {
             Item::Face(pts) => polys.push(pts.iter().map(|p| ix.index(*p))),
             Item::Block(b) if block_mode => polys.push(b.points.iter().map(|(_, p)| ix.index(*p))),
@@ -155,28 +217,18 @@ pub fn read_from(
             }
         }
     }
-    let positions = ix.into_positions();
-    let (faces, stats) = polys.triangulate(&positions, opts.quad_split);
-    let layout = match (point_lines > 0, face_lines > 0, block_mode) {
+    (ix.into_positions(), polys)
+}
+
+/// The layout the report names, from whether there were point lines and face lines.
+fn layout_name(point_lines: bool, face_lines: bool, block_mode: bool) -> &'static str {
+    match (point_lines, face_lines, block_mode) {
         (true, true, _) => "mixed",
         (false, true, _) => "face per line",
         (true, false, true) => "faces between blank lines",
         (true, false, false) => "one point per line",
         (false, false, _) => "empty",
-    };
-    let info = ReadInfo {
-        format: FORMAT.into(),
-        layout: Some(layout.into()),
-        points: Some(total_points),
-        vertices_in_file: positions.len(),
-        polygons: stats,
-        ..ReadInfo::default()
-    };
-    Ok(ReadOutput {
-        texcoords: None,
-        mesh: TriMesh::new(positions, faces),
-        info,
-    })
+    }
 }
 
 /// The numbers on one line of vertex triples.
