@@ -146,77 +146,162 @@ pub fn diagnose_with(
     applied: bool,
     clean: bool,
 ) -> Diagnosis {
-    let nv = mesh.positions.len();
-    let mut used = vec![false; nv];
-    let mut faces_ok = 0usize;
-    for f in &mesh.faces {
-        if !is_index_degenerate(f) {
-            faces_ok += 1;
-            for &v in f {
-                used[v as usize] = true;
+    let usage = VertexUsage::of(mesh);
+    let half = HalfEdges::of(mesh, topo);
+    let edges = half.manifold / 2 + half.boundary + plan.non_manifold_edges;
+    let (degenerate, duplicates) = if clean {
+        (0, 0)
+    } else {
+        (find_degenerate(mesh).1, find_duplicates(mesh).1)
+    };
+    let non_orientable = plan.components.iter().filter(|c| !c.orientable).count();
+    let (winding_consistent, outward) = winding(plan, applied, non_orientable);
+    let volumes = closed_volumes(plan, applied);
+    let total_volume = volumes.iter().map(|v| v.volume).sum();
+    let non_manifold_edges = plan.non_manifold_edges;
+    let closed_components = plan.components.iter().filter(|c| c.closed).count();
+    let mut d = Diagnosis {
+        vertices: mesh.positions.len(),
+        unreferenced_vertices: usage.unreferenced,
+        faces: mesh.faces.len(),
+        bbox: mesh.bbox().map(|b| BoxReport {
+            min: b.min.coords.into(),
+            max: b.max.coords.into(),
+            size: b.size().into(),
+            diagonal: b.diagonal(),
+        }),
+        edges,
+        components: plan.components.len(),
+        closed_components,
+        open_components: plan.components.len() - closed_components,
+        boundary_edges: half.boundary,
+        boundary_loops: half.boundary_loops,
+        non_manifold_edges,
+        non_manifold_vertices: count_non_manifold_vertices(mesh, topo),
+        degenerate_faces: degenerate,
+        duplicate_faces: duplicates,
+        near_duplicate_vertices: None,
+        winding_consistent,
+        non_orientable_components: non_orientable,
+        outward,
+        watertight: usage.faces_ok > 0 && half.boundary == 0 && non_manifold_edges == 0,
+        volumes,
+        total_volume,
+        euler_characteristic: usage.used as i64 - edges as i64 + usage.faces_ok as i64,
+        // Set below from the facts above.
+        shell_state: ShellState::Irregular,
+    };
+    d.shell_state = shell_state(&d);
+    d
+}
+
+/// How the faces use the vertices.
+struct VertexUsage {
+    /// Faces without a repeated corner.
+    faces_ok: usize,
+    /// Vertices those faces use.
+    used: usize,
+    /// Vertices no face uses.
+    unreferenced: usize,
+}
+
+impl VertexUsage {
+    /// Counts the usage in `mesh`.
+    fn of(mesh: &TriMesh) -> VertexUsage {
+        let nv = mesh.positions.len();
+        let mut used = vec![false; nv];
+        let mut faces_ok = 0usize;
+        for f in &mesh.faces {
+            if !is_index_degenerate(f) {
+                faces_ok += 1;
+                for &v in f {
+                    used[v as usize] = true;
+                }
             }
         }
-    }
-    let unreferenced = {
         let mut any = vec![false; nv];
         for f in &mesh.faces {
             for &v in f {
                 any[v as usize] = true;
             }
         }
-        any.iter().filter(|&&u| !u).count()
-    };
-    let v_used = used.iter().filter(|&&u| u).count();
-
-    let mut manifold_half = 0usize;
-    let mut boundary = 0usize;
-    // Boundary loops: union-find over the boundary edges' ends.
-    let mut parent: Vec<usize> = (0..nv).collect();
-    for (h, &o) in topo.opp.iter().enumerate() {
-        if is_index_degenerate(&mesh.faces[h / 3]) {
-            continue;
-        }
-        match o {
-            BOUNDARY => {
-                boundary += 1;
-                let f = &mesh.faces[h / 3];
-                let a = uf_root(&mut parent, f[h % 3] as usize);
-                let b = uf_root(&mut parent, f[(h + 1) % 3] as usize);
-                parent[a.max(b)] = a.min(b);
-            }
-            NON_MANIFOLD => {}
-            _ => manifold_half += 1,
+        VertexUsage {
+            faces_ok,
+            used: used.iter().filter(|&&u| u).count(),
+            unreferenced: any.iter().filter(|&&u| !u).count(),
         }
     }
-    let boundary_loops = {
-        let mut roots: Vec<usize> = Vec::new();
+}
+
+/// The half-edges of the faces without a repeated corner, by kind, and the boundary's loops.
+struct HalfEdges {
+    /// Half-edges with one opposite half-edge.
+    manifold: usize,
+    /// Half-edges with none (boundary edges).
+    boundary: usize,
+    /// Connected pieces of the boundary-edge graph.
+    boundary_loops: usize,
+}
+
+impl HalfEdges {
+    /// Counts the half-edges of `mesh`; joins the boundary edges' ends by union-find.
+    fn of(mesh: &TriMesh, topo: &Topology) -> HalfEdges {
+        let mut manifold = 0usize;
+        let mut boundary = 0usize;
+        // Boundary loops: union-find over the boundary edges' ends.
+        let mut parent: Vec<usize> = (0..mesh.positions.len()).collect();
         for (h, &o) in topo.opp.iter().enumerate() {
-            if o == BOUNDARY && !is_index_degenerate(&mesh.faces[h / 3]) {
-                roots.push(uf_root(&mut parent, mesh.faces[h / 3][h % 3] as usize));
+            if is_index_degenerate(&mesh.faces[h / 3]) {
+                continue;
+            }
+            match o {
+                BOUNDARY => {
+                    boundary += 1;
+                    let f = &mesh.faces[h / 3];
+                    let a = uf_root(&mut parent, f[h % 3] as usize);
+                    let b = uf_root(&mut parent, f[(h + 1) % 3] as usize);
+                    parent[a.max(b)] = a.min(b);
+                }
+                NON_MANIFOLD => {}
+                _ => manifold += 1,
             }
         }
-        roots.sort_unstable();
-        roots.dedup();
-        roots.len()
-    };
-    let edges = manifold_half / 2 + boundary + plan.non_manifold_edges;
-    let non_manifold_vertices = count_non_manifold_vertices(mesh, topo);
-    let (degenerate, duplicates) = if clean {
-        (0, 0)
-    } else {
-        (find_degenerate(mesh).1, find_duplicates(mesh).1)
-    };
+        HalfEdges {
+            manifold,
+            boundary,
+            boundary_loops: boundary_loops(mesh, topo, &mut parent),
+        }
+    }
+}
 
-    let non_orientable = plan.components.iter().filter(|c| !c.orientable).count();
-    let (winding_consistent, outward) = if applied {
+/// The number of distinct union-find roots among the boundary edges' first ends.
+fn boundary_loops(mesh: &TriMesh, topo: &Topology, parent: &mut [usize]) -> usize {
+    let mut roots: Vec<usize> = Vec::new();
+    for (h, &o) in topo.opp.iter().enumerate() {
+        if o == BOUNDARY && !is_index_degenerate(&mesh.faces[h / 3]) {
+            roots.push(uf_root(parent, mesh.faces[h / 3][h % 3] as usize));
+        }
+    }
+    roots.sort_unstable();
+    roots.dedup();
+    roots.len()
+}
+
+/// Whether the winding is consistent, and whether it also faces outward by the plan, as the
+/// mesh is or (with `applied`) after the plan.
+fn winding(plan: &Plan, applied: bool, non_orientable: usize) -> (bool, bool) {
+    if applied {
         (non_orientable == 0, non_orientable == 0)
     } else {
         let consistent =
             non_orientable == 0 && plan.components.iter().all(|c| c.inconsistent_faces == 0);
         (consistent, consistent && plan.is_noop())
-    };
-    let volumes: Vec<ClosedVolume> = plan
-        .components
+    }
+}
+
+/// The closed components' volumes, as the mesh is or (with `applied`) after the plan.
+fn closed_volumes(plan: &Plan, applied: bool) -> Vec<ClosedVolume> {
+    plan.components
         .iter()
         .enumerate()
         .filter(|(_, c)| c.closed)
@@ -231,54 +316,24 @@ pub fn diagnose_with(
                 outward,
             }
         })
-        .collect();
-    let total_volume = volumes.iter().map(|v| v.volume).sum();
-    let non_manifold_edges = plan.non_manifold_edges;
-    let watertight = faces_ok > 0 && boundary == 0 && non_manifold_edges == 0;
-    let shell_state = if mesh.faces.is_empty()
-        || degenerate > 0
-        || duplicates > 0
-        || non_manifold_edges > 0
-        || non_manifold_vertices > 0
+        .collect()
+}
+
+/// The shell state of a diagnosis whose other facts are set (see the module docs).
+fn shell_state(d: &Diagnosis) -> ShellState {
+    if d.faces == 0
+        || d.degenerate_faces > 0
+        || d.duplicate_faces > 0
+        || d.non_manifold_edges > 0
+        || d.non_manifold_vertices > 0
     {
         ShellState::Irregular
-    } else if !winding_consistent {
+    } else if !d.winding_consistent {
         ShellState::Regular
-    } else if watertight && outward && volumes.iter().all(|v| v.outward) {
+    } else if d.watertight && d.outward && d.volumes.iter().all(|v| v.outward) {
         ShellState::Closed
     } else {
         ShellState::Oriented
-    };
-    let closed_components = plan.components.iter().filter(|c| c.closed).count();
-    Diagnosis {
-        vertices: nv,
-        unreferenced_vertices: unreferenced,
-        faces: mesh.faces.len(),
-        bbox: mesh.bbox().map(|b| BoxReport {
-            min: b.min.coords.into(),
-            max: b.max.coords.into(),
-            size: b.size().into(),
-            diagonal: b.diagonal(),
-        }),
-        edges,
-        components: plan.components.len(),
-        closed_components,
-        open_components: plan.components.len() - closed_components,
-        boundary_edges: boundary,
-        boundary_loops,
-        non_manifold_edges,
-        non_manifold_vertices,
-        degenerate_faces: degenerate,
-        duplicate_faces: duplicates,
-        near_duplicate_vertices: None,
-        winding_consistent,
-        non_orientable_components: non_orientable,
-        outward,
-        watertight,
-        volumes,
-        total_volume,
-        euler_characteristic: v_used as i64 - edges as i64 + faces_ok as i64,
-        shell_state,
     }
 }
 
