@@ -398,7 +398,7 @@ fn plan(
         None => (opts.nodes_around, opts.stride, opts.lanczos, None),
         Some(tol) => choose(sections, tol, warnings),
     };
-    if (k_all - 1) % stride != 0 {
+    if !(k_all - 1).is_multiple_of(stride) {
         return Err(FitError::Options(format!(
             "stride {stride} does not divide the {} intervals between {k_all} sections",
             k_all - 1
