@@ -133,7 +133,12 @@ type HeaderError = (Location, ProblemKind);
 fn parse_header(bytes: &[u8]) -> Result<Header, HeaderError> {
     let mut lines = HeaderLines {
         bytes,
-        pos: 0,
+        // A UTF-8 byte order mark before `ply` (some Windows tools write one) is read past.
+        pos: if bytes.starts_with(&[0xEF, 0xBB, 0xBF]) {
+            3
+        } else {
+            0
+        },
         line_no: 0,
     };
     match lines.next_line() {
@@ -988,6 +993,16 @@ mod tests {
         let m = crate::mesh::generate::icosphere(1);
         for ascii in [false, true] {
             let mut buf = Vec::new();
+            write(&mut buf, &m, ascii).unwrap();
+            assert_eq!(read_bytes(&buf).unwrap().mesh, m);
+        }
+    }
+
+    #[test]
+    fn a_byte_order_mark_before_ply_is_read_past_in_both_encodings() {
+        let m = crate::mesh::generate::icosphere(1);
+        for ascii in [false, true] {
+            let mut buf = b"\xEF\xBB\xBF".to_vec();
             write(&mut buf, &m, ascii).unwrap();
             assert_eq!(read_bytes(&buf).unwrap().mesh, m);
         }

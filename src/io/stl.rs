@@ -22,6 +22,7 @@ use crate::math::Point3;
 use crate::mesh::polygon::{PolygonStats, Polygons};
 use crate::mesh::weld::ExactIndexer;
 use crate::mesh::TriMesh;
+use std::borrow::Cow;
 use std::io::Write;
 use std::path::Path;
 
@@ -48,7 +49,8 @@ pub fn starts_with_solid(bytes: &[u8]) -> bool {
 pub fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<ReadOutput, IoError> {
     if is_binary(bytes) {
         read_binary(path, bytes)
-    } else if starts_with_solid(bytes) {
+    } else if starts_with_solid(&super::text::decode(bytes).unwrap_or(Cow::Borrowed(bytes))) {
+        // Seen after decoding: an ASCII STL may start with a byte order mark or be UTF-16.
         read_ascii(path, bytes, opts)
     } else {
         let size = bytes.len() as u64;
@@ -493,6 +495,23 @@ pub fn write_ascii(w: &mut impl Write, mesh: &TriMesh) -> std::io::Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn an_ascii_stl_with_a_byte_order_mark_or_in_utf16_is_read_as_ascii() {
+        // Its first bytes are not "solid": it was read as a binary STL promising 807,416,096
+        // triangles.
+        let s = "solid t\n facet normal 0 0 1\n  outer loop\n   vertex 0 0 0\n   vertex 1 0 0\n   vertex 0 1 0\n  endloop\n endfacet\nendsolid t\n";
+        let plain = read(Path::new("a.stl"), s.as_bytes(), &ReadOptions::default()).unwrap();
+        let mut bom = b"\xEF\xBB\xBF".to_vec();
+        bom.extend_from_slice(s.as_bytes());
+        let mut utf16 = vec![0xFF, 0xFE];
+        utf16.extend(s.encode_utf16().flat_map(|u| u.to_le_bytes()));
+        for bytes in [bom, utf16] {
+            let r = read(Path::new("a.stl"), &bytes, &ReadOptions::default()).unwrap();
+            assert_eq!(r.mesh, plain.mesh);
+            assert_eq!(r.info.format, "stl-ascii");
+        }
+    }
 
     #[test]
     fn multi_solid_tab_name_and_nan_normal() {
