@@ -437,6 +437,40 @@ pub(super) fn stage_preview(
     Ok(path.display().to_string())
 }
 
+/// What every phase of a run reads: its arguments, its scene, the inputs (never written over)
+/// and the factor from metres to the scene's units.
+struct Ctx<'a> {
+    args: &'a DrapeArgs,
+    sc: &'a scene::Scene,
+    inputs: Vec<&'a Path>,
+    to_units: f64,
+}
+
+/// Where a run keeps its checkpoint, the checkpoint it continues from, and what existed in the
+/// output before it.
+struct Prepared {
+    checkpoint: PathBuf,
+    fingerprint: sim::checkpoint::Fingerprint,
+    resume: Option<sim::Checkpoint>,
+    existed: Existed,
+}
+
+/// A finished stepping loop: its statistics, the frames staged, and the frames kept for the
+/// glTF file (metres, z up).
+struct Stepped {
+    stats: sim::RunStats,
+    staged: Vec<io::Staged>,
+    glb_frames: Vec<(u64, Vec<crate::math::Point3>)>,
+}
+
+/// What the end of a run staged and put in place.
+struct Written {
+    pieces: Vec<PieceReport>,
+    object_files: Vec<Vec<String>>,
+    preview: Option<String>,
+    glb: Option<PathBuf>,
+}
+
 /// Runs `drapekit drape`.
 pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
     let start = std::time::Instant::now();
@@ -448,31 +482,61 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
     sc.choose_step(world.stable_step)?;
     let placement = sim::placement_warnings(&world);
     super::warn(&placement);
+    super::refuse_file_output(&args.output)?;
+    let mut prepared = prepare(&args, &sc)?;
+    let ctx = Ctx {
+        args: &args,
+        sc: &sc,
+        inputs: std::iter::once(sc.path.as_path())
+            .chain(sc.objects.iter().map(|o| o.mesh.as_path()))
+            .collect(),
+        to_units: Units::factor(Units::M, sc.units),
+    };
+    let Stepped {
+        stats,
+        staged,
+        glb_frames,
+    } = step(&ctx, &mut world, &mut prepared)?;
+    let existed = prepared.existed;
+    let written = write_outputs(&ctx, &world, existed, staged, glb_frames, stats.steps)?;
+    remove_checkpoint(&prepared.checkpoint);
+    let report = drape_report(&ctx, &world, &stats, written, placement, start);
+    super::finish(
+        &report,
+        args.report.as_deref(),
+        &ctx.inputs,
+        &args.output,
+        args.json,
+        print_summary,
+    )
+}
+
+/// Readies the output directory before any work: the temporary files of killed runs removed,
+/// the checkpoint read (`--resume`) or noted, and what exists there recorded. Nothing is
+/// created until there is something to write.
+fn prepare(args: &DrapeArgs, sc: &scene::Scene) -> anyhow::Result<Prepared> {
     let out = &args.output;
-    if out.is_file() {
-        anyhow::bail!(
-            "{} is a file: the output must be a directory",
-            out.display()
-        );
-    }
     super::remove_stale_temps(&[out, &out.join("frames")]);
-    let checkpoint = out.join(format!("{}.checkpoint", scene_stem(&sc)));
-    let fingerprint = sim::checkpoint::fingerprint(&sc, &format!("glb={}", args.glb))?;
-    let mut resume = read_checkpoint(&checkpoint, &fingerprint, args.resume)?;
-    // Nothing is created until there is something to write. Every output (frames, pieces) is
-    // staged in a temporary file and renamed into place only when the run has succeeded: a failed
-    // run leaves an earlier run's files as they were.
+    let checkpoint = out.join(format!("{}.checkpoint", scene_stem(sc)));
+    let fingerprint = sim::checkpoint::fingerprint(sc, &format!("glb={}", args.glb))?;
+    let resume = read_checkpoint(&checkpoint, &fingerprint, args.resume)?;
+    // Every output (frames, pieces) is staged in a temporary file and renamed into place only
+    // when the run has succeeded: a failed run leaves an earlier run's files as they were.
     let existed = Existed {
         out: out.exists(),
         frames: out.join("frames").exists(),
     };
-    let staged = std::cell::RefCell::new(Vec::<io::Staged>::new());
-    let to_units = Units::factor(Units::M, sc.units);
-    let inputs: Vec<&Path> = std::iter::once(sc.path.as_path())
-        .chain(sc.objects.iter().map(|o| o.mesh.as_path()))
-        .collect();
-    let total = sc.stop.max_steps();
-    let bar = super::interactive().then(|| {
+    Ok(Prepared {
+        checkpoint,
+        fingerprint,
+        resume,
+        existed,
+    })
+}
+
+/// The progress bar over `total` steps (on a terminal only).
+fn progress_bar(total: u64) -> Option<indicatif::ProgressBar> {
+    super::interactive().then(|| {
         let b = indicatif::ProgressBar::new(total);
         b.set_style(
             indicatif::ProgressStyle::with_template(
@@ -481,35 +545,53 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
             .unwrap(),
         );
         b
-    });
-    let frames_dir = out.join("frames");
-    let names: Vec<String> = sc.pieces.iter().map(|p| p.name.clone()).collect();
+    })
+}
+
+/// Stages each piece of `w` at `step` as `frames/<piece>_<step>.obj` into `staged`.
+fn stage_frame(
+    ctx: &Ctx,
+    w: &World,
+    step: u64,
+    staged: &mut Vec<io::Staged>,
+) -> Result<(), sim::SimError> {
+    let frames_dir = ctx.args.output.join("frames");
+    let failed = |e: &dyn std::fmt::Display| sim::SimError::Frame {
+        step,
+        message: e.to_string(),
+    };
+    std::fs::create_dir_all(&frames_dir).map_err(|e| failed(&e))?;
+    for (i, p) in ctx.sc.pieces.iter().enumerate() {
+        let path = frames_dir.join(format!("{}_{step:07}.obj", p.name));
+        let f = io::stage_obj_with_rest(
+            &path,
+            &piece_mesh(w, i, ctx.to_units),
+            &piece_rest(w, i, ctx.to_units),
+            &[],
+            &ctx.inputs,
+        )
+        .map_err(|e| failed(&e))?;
+        staged.push(f);
+    }
+    Ok(())
+}
+
+/// Steps the world to the scene's stop (from the checkpoint with `--resume`), staging the
+/// frames. Interrupted, it puts the frames in place and keeps a checkpoint; failed, it
+/// abandons what it staged; both return the error.
+fn step(ctx: &Ctx, world: &mut World, prepared: &mut Prepared) -> anyhow::Result<Stepped> {
+    let sc = ctx.sc;
+    let staged = std::cell::RefCell::new(Vec::<io::Staged>::new());
+    let total = sc.stop.max_steps();
+    let bar = progress_bar(total);
     // The frames kept for the glTF file: the positions, in metres and z up.
-    let kept = resume.as_mut().map(|c| std::mem::take(&mut c.frames));
+    let kept = (prepared.resume.as_mut()).map(|c| std::mem::take(&mut c.frames));
     let glb_frames = std::cell::RefCell::new(kept.unwrap_or_default());
     let mut frame = |step: u64, w: &World| -> Result<bool, sim::SimError> {
-        if args.glb {
+        if ctx.args.glb {
             glb_frames.borrow_mut().push((step, w.state.x.clone()));
         }
-        std::fs::create_dir_all(&frames_dir).map_err(|e| sim::SimError::Frame {
-            step,
-            message: e.to_string(),
-        })?;
-        for (i, name) in names.iter().enumerate() {
-            let p = frames_dir.join(format!("{name}_{step:07}.obj"));
-            let f = io::stage_obj_with_rest(
-                &p,
-                &piece_mesh(w, i, to_units),
-                &piece_rest(w, i, to_units),
-                &[],
-                &inputs,
-            )
-            .map_err(|e| sim::SimError::Frame {
-                step,
-                message: e.to_string(),
-            })?;
-            staged.borrow_mut().push(f);
-        }
+        stage_frame(ctx, w, step, &mut staged.borrow_mut())?;
         Ok(false)
     };
     let progress = |step: u64| {
@@ -517,84 +599,117 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
             b.set_position(step);
         }
     };
-    if let (Some(b), Some(c)) = (&bar, &resume) {
+    if let (Some(b), Some(c)) = (&bar, &prepared.resume) {
         b.set_position(c.step);
     }
     let signals = super::interrupt::install()?;
     let control = sim::Control {
         cancel: Some(signals.cancel()),
-        resume: resume.as_ref(),
+        resume: prepared.resume.as_ref(),
         ..sim::Control::default()
     };
     let stats = sim::run(
-        &mut world, &sc.solver, sc.stop, sc.frames, &mut frame, &progress, control,
+        world, &sc.solver, sc.stop, sc.frames, &mut frame, &progress, control,
     );
     if let Some(b) = &bar {
         b.finish_and_clear();
     }
-    let mut staged = staged.into_inner();
-    let stats = match stats {
-        Ok(s) => s,
+    let staged = staged.into_inner();
+    match stats {
+        Ok(stats) => Ok(Stepped {
+            stats,
+            staged,
+            glb_frames: glb_frames.into_inner(),
+        }),
         Err(sim::SimError::Interrupted(mut c)) => {
-            c.fingerprint = fingerprint;
+            c.fingerprint = prepared.fingerprint.clone();
             c.frames = glb_frames.take();
-            return Err(keep_checkpoint(
+            let path = &prepared.checkpoint;
+            Err(keep_checkpoint(
                 *c,
                 staged,
-                &checkpoint,
+                path,
                 total,
-                &inputs,
+                &ctx.inputs,
                 signals,
-            ));
+            ))
         }
         Err(e) => {
-            abandon(staged, out, existed);
-            return Err(e.into());
+            abandon(staged, &ctx.args.output, prepared.existed);
+            Err(e.into())
         }
-    };
-    let object_names = object_names(&sc, out);
-    let glb_path = args
-        .glb
-        .then(|| out.join(format!("{}.glb", scene_stem(&sc))));
-    type Written = (Vec<PieceReport>, Vec<Vec<String>>, Option<String>);
+    }
+}
+
+/// Stages the pieces, the objects as placed, the preview and the glTF file (its frames from
+/// `frames`, the run having taken `steps`) beside the staged frames, and puts them all in
+/// place; after a failure abandons them all.
+fn write_outputs(
+    ctx: &Ctx,
+    world: &World,
+    existed: Existed,
+    mut staged: Vec<io::Staged>,
+    frames: Vec<(u64, Vec<crate::math::Point3>)>,
+    steps: u64,
+) -> anyhow::Result<Written> {
+    let (sc, out, inputs) = (ctx.sc, ctx.args.output.as_path(), &ctx.inputs);
+    let object_names = object_names(sc, out);
+    let glb = (ctx.args.glb).then(|| out.join(format!("{}.glb", scene_stem(sc))));
     let written = (|| -> anyhow::Result<Written> {
-        let pieces = stage_pieces(&sc, &world, out, &inputs, &mut staged)?;
-        let objects = stage_objects(&sc, &world, &object_names, out, &inputs, &mut staged)?;
-        let preview = args
-            .preview
-            .then(|| stage_preview(&world, out, to_units, &inputs, &mut staged))
+        let pieces = stage_pieces(sc, world, out, inputs, &mut staged)?;
+        let object_files = stage_objects(sc, world, &object_names, out, inputs, &mut staged)?;
+        let preview = (ctx.args.preview)
+            .then(|| stage_preview(world, out, ctx.to_units, inputs, &mut staged))
             .transpose()?;
-        if let Some(path) = &glb_path {
-            let frames = glb_frames.take();
+        if let Some(path) = &glb {
             let frames = frames
                 .into_iter()
-                .map(|(s, x)| (s, piece_meshes(&world, &x)));
-            let scene = gltf_scene(&sc, &world, &object_names, frames.collect(), stats.steps);
-            staged.push(gltf::stage_scene(path, &scene, &inputs)?);
+                .map(|(s, x)| (s, piece_meshes(world, &x)));
+            let scene = gltf_scene(sc, world, &object_names, frames.collect(), steps);
+            staged.push(gltf::stage_scene(path, &scene, inputs)?);
         }
         io::commit(std::mem::take(&mut staged))?;
-        Ok((pieces, objects, preview))
+        Ok(Written {
+            pieces,
+            object_files,
+            preview,
+            glb: glb.clone(),
+        })
     })();
-    let (pieces, object_files, preview) = match written {
-        Ok(w) => w,
-        Err(e) => {
-            abandon(staged, out, existed);
-            return Err(e);
-        }
-    };
-    if checkpoint.exists() && std::fs::remove_file(&checkpoint).is_ok() {
+    if written.is_err() {
+        abandon(staged, out, existed);
+    }
+    written
+}
+
+/// Removes the checkpoint of an interrupted run once this run is complete, and says so.
+fn remove_checkpoint(checkpoint: &Path) {
+    if checkpoint.exists() && std::fs::remove_file(checkpoint).is_ok() {
         eprintln!(
             "note: removed {}: the run is complete",
             checkpoint.display()
         );
     }
-    let inside = sim::particles_inside(&world);
-    let objects = object_reports(&world, to_units, object_files);
+}
+
+/// The report of a finished run: the world at the end, the run's statistics, the files
+/// written, the placement's warnings; `start` is when the command started.
+fn drape_report(
+    ctx: &Ctx,
+    world: &World,
+    stats: &sim::RunStats,
+    written: Written,
+    warnings: Vec<String>,
+    start: std::time::Instant,
+) -> DrapeReport {
+    let sc = ctx.sc;
+    let inside = sim::particles_inside(world);
+    let objects = object_reports(world, ctx.to_units, written.object_files);
     let (max_strain, mean_strain) = sim::strain(&world.model, &world.state.x);
     let m = &world.model;
-    let report = DrapeReport {
+    DrapeReport {
         scene: sc.path.display().to_string(),
-        output_dir: out.display().to_string(),
+        output_dir: ctx.args.output.display().to_string(),
         units: sc.units,
         particles: m.len(),
         springs: m.springs.len() + m.bends(),
@@ -614,51 +729,41 @@ pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
         at_rest: stats.at_rest,
         wall_seconds: stats.wall_seconds,
         collision_seconds: stats.collision_seconds,
-        phases: Phases {
-            predict_seconds: stats.predict_seconds,
-            solve_seconds: stats.solve_seconds,
-            collision_seconds: stats.collision_seconds,
-            measure_seconds: stats.measure_seconds,
-            factor_seconds: stats.solver.factor_seconds,
-            factorisations: stats.solver.factorisations,
-            low_rank_columns: stats.solver.low_rank_columns,
-            cg_iterations: stats.solver.cg_iterations,
-            pd_iterations: stats.solver.pd_iterations,
-        },
+        phases: phases(stats),
         contacts_end: world.state.contact.iter().filter(|c| c.is_some()).count(),
         particles_inside: inside_total(&inside),
-        open_objects: objects
-            .iter()
-            .filter(|o| !o.closed)
+        open_objects: (objects.iter().filter(|o| !o.closed))
             .map(|o| o.name.clone())
             .collect(),
         min_clearance: objects.iter().map(|o| o.min_clearance).reduce(f64::min),
         max_strain,
         mean_strain,
         kinetic_energy_end: crate::cloth::forces::kinetic_energy(m, &world.state.v),
-        finite: world
-            .state
-            .x
-            .iter()
-            .all(|p| p.iter().all(|c| c.is_finite())),
+        finite: (world.state.x.iter()).all(|p| p.iter().all(|c| c.is_finite())),
         max_frequency: world.max_frequency,
         stable_step_estimate: world.stable_step,
         objects,
-        pieces,
-        warnings: placement,
-        glb: glb_path.map(|p| p.display().to_string()),
-        preview,
+        pieces: written.pieces,
+        warnings,
+        glb: written.glb.map(|p| p.display().to_string()),
+        preview: written.preview,
         command_seconds: start.elapsed().as_secs_f64(),
-    };
-    let out_path = args.output.clone();
-    super::finish(
-        &report,
-        args.report.as_deref(),
-        &inputs,
-        &out_path,
-        args.json,
-        print_summary,
-    )
+    }
+}
+
+/// Where the time of a run's steps went, and the solver's work.
+fn phases(stats: &sim::RunStats) -> Phases {
+    Phases {
+        predict_seconds: stats.predict_seconds,
+        solve_seconds: stats.solve_seconds,
+        collision_seconds: stats.collision_seconds,
+        measure_seconds: stats.measure_seconds,
+        factor_seconds: stats.solver.factor_seconds,
+        factorisations: stats.solver.factorisations,
+        low_rank_columns: stats.solver.low_rank_columns,
+        cg_iterations: stats.solver.cg_iterations,
+        pd_iterations: stats.solver.pd_iterations,
+    }
 }
 
 /// Each object's report at the end of a run (lengths times `to_units`, from metres), with its

@@ -181,6 +181,17 @@ pub fn remove_stale_temps(dirs: &[&std::path::Path]) {
     }
 }
 
+/// Refuses an output that is a file: every job writes into a directory.
+fn refuse_file_output(out: &std::path::Path) -> anyhow::Result<()> {
+    if out.is_file() {
+        anyhow::bail!(
+            "{} is a file: the output must be a directory",
+            out.display()
+        );
+    }
+    Ok(())
+}
+
 /// Whether progress bars may be drawn (stderr is a terminal).
 pub fn interactive() -> bool {
     std::io::stderr().is_terminal()
