@@ -696,120 +696,25 @@ pub fn run(args: GarmentArgs) -> anyhow::Result<()> {
         note: body_note,
         moved,
     } = read_body(&args.body, &args.body_units, &pattern)?;
-    if args.output.is_file() {
-        bail!(
-            "{} is a file: the output must be a directory",
-            args.output.display()
-        );
-    }
+    super::refuse_file_output(&args.output)?;
     let fit = fit_check(&pattern, &body, &fit_options(&settings))?;
     warn_too_short(&fit);
-    let progress = |t: f64| {
-        if super::interactive() {
-            eprint!("\rsewing: {t:.2} s simulated");
-        }
-    };
     super::remove_stale_temps(&[&args.output, &args.output.join("panels")]);
-    let signals = super::interrupt::install()?;
-    let cancel = Some(signals.cancel());
-    let g = match gd::sew_and_drape(
-        &pattern,
-        vec![gd::body_collider(body)],
-        &settings,
-        &progress,
-        cancel,
-    ) {
-        Err(gd::GarmentError::Sim(crate::sim::SimError::Interrupted(_))) => {
-            let what = "during the garment run: a garment keeps no checkpoint; nothing was written";
-            return Err(signals.interrupted(what).into());
-        }
-        g => g?,
-    };
-    if super::interactive() {
-        eprintln!();
-    }
+    let g = sew_interruptibly(&pattern, vec![gd::body_collider(body)], &settings)??;
     let (outcome, world) = outcome(g, &pattern, Up::Y, 1.0);
-    let c = &world.colliders[0];
-    std::fs::create_dir_all(&args.output)
-        .with_context(|| format!("cannot create {}", args.output.display()))?;
     let inputs = [args.pattern.as_path(), args.body.as_path()];
-    let stem = |p: &Path| p.file_stem().map(|s| s.to_string_lossy().into_owned());
-    let name = stem(&args.pattern).unwrap_or_else(|| "garment".into());
-    let name = name
-        .strip_suffix("_specification")
-        .unwrap_or(&name)
-        .to_string();
-    let (mesh, groups) = garment_mesh(&world, Up::Y, 1.0);
-    let garment_path = args.output.join(format!("{name}.obj"));
-    write_groups(&garment_path, &mesh, &world.model.rest, &groups, &inputs)?;
-    let mut files = vec![garment_path.display().to_string()];
-    if args.panels {
-        files.extend(write_panels(
-            &args.output.join("panels"),
-            &mesh,
-            &groups,
-            &inputs,
-        )?);
-    }
-    let mut body_mesh = c.mesh.clone();
-    change_up(&mut body_mesh, Up::Z, Up::Y);
-    // The body is named after its file, unless the garment has that name.
-    let body_name = stem(&args.body).unwrap_or_else(|| "body".into());
-    let body_name =
-        io::unique_file_names(&[body_name], std::slice::from_ref(&name), "body").remove(0);
-    let body_path = args.output.join(format!("{body_name}.obj"));
-    io::write_mesh(
-        &body_path,
-        &body_mesh,
-        &io::WriteOptions::default(),
-        &inputs,
-    )?;
-    let mut files: Vec<String> = files
-        .into_iter()
-        .chain([body_path.display().to_string()])
-        .collect();
-    if args.glb {
-        let path = args.output.join(format!("{name}.glb"));
-        let rest = &world.model.rest;
-        let bodies = [(body_name.as_str(), &body_mesh)];
-        stage_glb(&path, &mesh, rest, &groups, &bodies, &inputs)?.commit()?;
-        files.push(path.display().to_string());
-    }
-    if args.preview {
-        let p = args.output.join(format!("{name}.png"));
-        write_preview(&p, &mesh, &body_mesh, &inputs)?;
-        files.push(p.display().to_string());
-    }
-    let mut assumed = vec![body_note];
-    assumed.push(format!(
-        "the pattern is in units of 1/{} m (its units_in_meter)",
-        pattern.units_in_meter
-    ));
-    if let Some(seed) = args.perturb {
-        assumed.push(format!(
-            "the panels start moved by up to {} m per coordinate (--perturb {seed})",
-            crate::garment::perturb::PERTURB_M
-        ));
-    }
-    let waist_edges = waist_edges(&pattern);
-    if waist_edges > 0 && args.hold_waist == "off" {
-        assumed.push(format!(
-            "the pattern's {waist_edges} waist edges (labelled {}) are not held while sewing \
-             (--hold-waist auto holds them at the body's natural waist)",
-            crate::garment::waist::WAIST_LABEL
-        ));
-    }
+    let files = write_outputs(&args, &world, &inputs)?;
     let report = GarmentReport {
         pattern: args.pattern.display().to_string(),
         body: args.body.display().to_string(),
-        assumed,
+        assumed: assumed(&args, &pattern, body_note),
         body_moved_m: moved.map(|d| [d.x, d.y, d.z]),
         fabric: args.fabric.clone(),
         spacing: args.spacing,
         integrator: args.integrator,
         bending_hessian: args.bending_hessian,
         seam_ramp: settings.seam_ramp,
-        body_closed: c.closed,
+        body_closed: world.colliders[0].closed,
         fit_check: fit,
         outcome,
         files,
@@ -823,6 +728,124 @@ pub fn run(args: GarmentArgs) -> anyhow::Result<()> {
         args.json,
         print_summary,
     )
+}
+
+/// Sews and drapes `pattern` on `bodies` with `settings`, a line of progress on a terminal.
+/// An interrupt is the outer error (a garment keeps no checkpoint: nothing was written); the
+/// garment's own errors are left to the caller to name.
+pub(super) fn sew_interruptibly(
+    pattern: &Pattern,
+    bodies: Vec<crate::collide::Collider>,
+    settings: &GarmentSettings,
+) -> anyhow::Result<Result<gd::Garment, gd::GarmentError>> {
+    let progress = |t: f64| {
+        if super::interactive() {
+            eprint!("\rsewing: {t:.2} s simulated");
+        }
+    };
+    let signals = super::interrupt::install()?;
+    let cancel = Some(signals.cancel());
+    match gd::sew_and_drape(pattern, bodies, settings, &progress, cancel) {
+        Err(gd::GarmentError::Sim(sim::SimError::Interrupted(_))) => {
+            let what = "during the garment run: a garment keeps no checkpoint; nothing was written";
+            Err(signals.interrupted(what).into())
+        }
+        sewn => {
+            if sewn.is_ok() && super::interactive() {
+                eprintln!();
+            }
+            Ok(sewn)
+        }
+    }
+}
+
+/// A file's stem, if it has one.
+fn file_stem(p: &Path) -> Option<String> {
+    p.file_stem().map(|s| s.to_string_lossy().into_owned())
+}
+
+/// Writes the garment (`<garment>.obj`, a group per panel), each panel alone (`--panels`),
+/// the body as placed, the glTF file (`--glb`) and the preview (`--preview`) into the output
+/// directory, in the pattern's frame (m, y up); returns the files written.
+fn write_outputs(
+    args: &GarmentArgs,
+    world: &sim::World,
+    inputs: &[&Path],
+) -> anyhow::Result<Vec<String>> {
+    std::fs::create_dir_all(&args.output)
+        .with_context(|| format!("cannot create {}", args.output.display()))?;
+    let name = file_stem(&args.pattern).unwrap_or_else(|| "garment".into());
+    let name = name
+        .strip_suffix("_specification")
+        .unwrap_or(&name)
+        .to_string();
+    let (mesh, groups) = garment_mesh(world, Up::Y, 1.0);
+    let garment_path = args.output.join(format!("{name}.obj"));
+    write_groups(&garment_path, &mesh, &world.model.rest, &groups, inputs)?;
+    let mut files = vec![garment_path.display().to_string()];
+    if args.panels {
+        let dir = args.output.join("panels");
+        files.extend(write_panels(&dir, &mesh, &groups, inputs)?);
+    }
+    let (body_name, body_mesh, body_path) = write_body(args, world, &name, inputs)?;
+    files.push(body_path);
+    if args.glb {
+        let path = args.output.join(format!("{name}.glb"));
+        let rest = &world.model.rest;
+        let bodies = [(body_name.as_str(), &body_mesh)];
+        stage_glb(&path, &mesh, rest, &groups, &bodies, inputs)?.commit()?;
+        files.push(path.display().to_string());
+    }
+    if args.preview {
+        let p = args.output.join(format!("{name}.png"));
+        write_preview(&p, &mesh, &body_mesh, inputs)?;
+        files.push(p.display().to_string());
+    }
+    Ok(files)
+}
+
+/// Writes the body as placed (y up) as `<body>.obj`, named after its file unless the garment
+/// (`garment`) has that name; returns its name, its mesh and its path.
+fn write_body(
+    args: &GarmentArgs,
+    world: &sim::World,
+    garment: &str,
+    inputs: &[&Path],
+) -> anyhow::Result<(String, TriMesh, String)> {
+    let mut body_mesh = world.colliders[0].mesh.clone();
+    change_up(&mut body_mesh, Up::Z, Up::Y);
+    let body_name = file_stem(&args.body).unwrap_or_else(|| "body".into());
+    let taken = [garment.to_string()];
+    let body_name = io::unique_file_names(&[body_name], &taken, "body").remove(0);
+    let body_path = args.output.join(format!("{body_name}.obj"));
+    let options = io::WriteOptions::default();
+    io::write_mesh(&body_path, &body_mesh, &options, inputs)?;
+    Ok((body_name, body_mesh, body_path.display().to_string()))
+}
+
+/// What the report says was assumed: the body's units and frame (`body_note`), the pattern's
+/// units, the perturbation, and waist edges left free.
+fn assumed(args: &GarmentArgs, pattern: &Pattern, body_note: String) -> Vec<String> {
+    let mut assumed = vec![body_note];
+    assumed.push(format!(
+        "the pattern is in units of 1/{} m (its units_in_meter)",
+        pattern.units_in_meter
+    ));
+    if let Some(seed) = args.perturb {
+        assumed.push(format!(
+            "the panels start moved by up to {} m per coordinate (--perturb {seed})",
+            crate::garment::perturb::PERTURB_M
+        ));
+    }
+    let waist_edges = waist_edges(pattern);
+    if waist_edges > 0 && args.hold_waist == "off" {
+        assumed.push(format!(
+            "the pattern's {waist_edges} waist edges (labelled {}) are not held while sewing \
+             (--hold-waist auto holds them at the body's natural waist)",
+            crate::garment::waist::WAIST_LABEL
+        ));
+    }
+    assumed
 }
 
 /// One line on a ring too short for the body where it sits.
@@ -933,7 +956,15 @@ fn hang_line(h: &crate::garment::hang::RingHang) -> String {
 
 /// The summary's lines on the sewing, the drape, the measures and the verdict.
 pub(super) fn print_outcome(r: &GarmentOutcome, wall_seconds: f64) {
-    for m in &r.panels_moved_out {
+    print_moved_out(&r.panels_moved_out);
+    print_sewing(r);
+    print_drape(r);
+    print_verdict(r, wall_seconds);
+}
+
+/// The summary's lines on the panels placed through the body.
+fn print_moved_out(moved: &[PanelMoved]) {
+    for m in moved {
         let what = if m.cleared {
             format!("moved {:.1} cm out along its normal", m.distance_m * 100.0)
         } else {
@@ -947,6 +978,11 @@ pub(super) fn print_outcome(r: &GarmentOutcome, wall_seconds: f64) {
             m.panel, m.particles_inside
         );
     }
+}
+
+/// The summary's lines on the sewing: its spacing, time, seam gap, the waist held, the
+/// stitches left open.
+fn print_sewing(r: &GarmentOutcome) {
     let coarse = (r.sew_particles != r.particles).then(|| {
         format!(
             " at {} cm ({} particles, then carried onto the drape's cloth)",
@@ -980,6 +1016,10 @@ pub(super) fn print_outcome(r: &GarmentOutcome, wall_seconds: f64) {
             o.stitch, o.edges[0], o.edges[1], o.gap_max_mm, o.height_m
         );
     }
+}
+
+/// The summary's lines on the drape: its time, the seams, the crossings, how the rings hang.
+fn print_drape(r: &GarmentOutcome) {
     println!(
         "  drape: {:.2} s simulated ({}), {:.1}% still moving",
         r.drape.time,
@@ -1011,6 +1051,10 @@ pub(super) fn print_outcome(r: &GarmentOutcome, wall_seconds: f64) {
     for h in &r.hang {
         println!("  {}", hang_line(h));
     }
+}
+
+/// The summary's lines on the verdict: what failed and where, the open seams, the gathers.
+fn print_verdict(r: &GarmentOutcome, wall_seconds: f64) {
     println!("  verdict: {} in {:.1} s", r.verdict, wall_seconds);
     for f in &r.failed {
         println!("    failed: {f}");
