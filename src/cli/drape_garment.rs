@@ -5,8 +5,8 @@
 
 use super::drape::{object_reports, stage_objects, DrapeArgs, ObjectReport};
 use super::garment::{
-    fit_options, garment_mesh, outcome, print_fit_check, print_outcome, stage_glb, warn_too_short,
-    GarmentOutcome,
+    fit_options, garment_mesh, outcome, print_fit_check, print_outcome, sew_interruptibly,
+    stage_glb, warn_too_short, GarmentOutcome,
 };
 use crate::collide::Collider;
 use crate::garment::drape as gd;
@@ -16,7 +16,7 @@ use crate::io::{self, WriteOptions};
 use crate::math::{short, Aabb, Point3};
 use crate::mesh::transform::{change_up_point, Units, Up};
 use crate::mesh::TriMesh;
-use crate::scene::Scene;
+use crate::scene::{GarmentSpec, Scene};
 use crate::sim;
 use anyhow::bail;
 use serde::Serialize;
@@ -60,125 +60,28 @@ pub struct GarmentSceneReport {
 
 /// Runs the scene `sc`, which has a garment.
 pub(super) fn run(args: &DrapeArgs, sc: Scene, start: std::time::Instant) -> anyhow::Result<()> {
-    let Some(spec) = &sc.garment else {
-        bail!("{}: the scene has no [[garment]]", sc.path.display());
-    };
-    if args.resume {
-        bail!(
-            "--resume: {} sews a [[garment]], and a garment's run keeps no checkpoint (an interrupted one writes nothing); run it without --resume",
-            sc.path.display()
-        );
-    }
+    let spec = check_args(args, &sc)?;
     let out = &args.output;
-    if out.is_file() {
-        bail!(
-            "{} is a file: the output must be a directory",
-            out.display()
-        );
-    }
     let bodies = sim::load_objects(&sc)?;
     let settings = &spec.settings;
-    let fit = scene_fit_check(&spec.pattern, &bodies, settings)?;
-    if let Some(f) = &fit {
-        warn_too_short(f);
-    }
-    let warnings: Vec<String> = placement_warning(&spec.pattern, &bodies, settings)
-        .into_iter()
-        .collect();
-    for w in &warnings {
-        eprintln!("warning: {}: {w}", sc.path.display());
-    }
+    let (fit, warnings) = check_pattern(&sc, spec, &bodies)?;
     super::remove_stale_temps(&[out]);
-    let progress = |t: f64| {
-        if super::interactive() {
-            eprint!("\rsewing: {t:.2} s simulated");
-        }
-    };
-    let signals = super::interrupt::install()?;
-    let cancel = Some(signals.cancel());
-    let g = match gd::sew_and_drape(&spec.pattern, bodies, settings, &progress, cancel) {
-        Err(gd::GarmentError::Sim(sim::SimError::Interrupted(_))) => {
-            let what = "during the garment run: a garment keeps no checkpoint; nothing was written";
-            return Err(signals.interrupted(what).into());
-        }
-        // The pattern against the objects (panels facing into the body, panels that make no
-        // cloth): before any simulation, under the pattern's key.
-        Err(e @ (gd::GarmentError::FacingIn(_) | gd::GarmentError::Assemble(_))) => {
-            bail!("{}: key 'garment.pattern': {e}", sc.path.display())
-        }
-        Err(e) => bail!("{}: {e}", sc.path.display()),
-        Ok(g) => g,
-    };
-    if super::interactive() {
-        eprintln!();
-    }
+    let g = sew(&sc, spec, bodies)?;
     let to_units = Units::factor(Units::M, sc.units);
     let (outcome, world) = outcome(g, &spec.pattern, Up::Z, to_units);
     let inputs: Vec<&Path> = [sc.path.as_path(), spec.path.as_path()]
         .into_iter()
         .chain(sc.objects.iter().map(|o| o.mesh.as_path()))
         .collect();
-    let names = super::drape::object_names(&sc, out);
-    let existed = out.exists();
-    let mut staged = Vec::new();
-    let written = (|| -> anyhow::Result<(Vec<String>, Vec<Vec<String>>)> {
-        std::fs::create_dir_all(out)
-            .map_err(|e| anyhow::anyhow!("cannot create {}: {e}", out.display()))?;
-        let (mesh, groups) = garment_mesh(&world, Up::Z, to_units);
-        let rest: Vec<[f64; 2]> = (world.model.rest.iter())
-            .map(|q| [q.x * to_units, q.y * to_units])
-            .collect();
-        let mut files = Vec::new();
-        let path = out.join(format!("{}.obj", spec.name));
-        staged.push(io::stage_obj_with_rest(
-            &path, &mesh, &rest, &groups, &inputs,
-        )?);
-        files.push(path.display().to_string());
-        if sc.ply {
-            let path = out.join(format!("{}.ply", spec.name));
-            staged.push(io::stage_mesh(&path, &mesh, &WriteOptions::default(), &inputs)?.0);
-            files.push(path.display().to_string());
-        }
-        let objects = stage_objects(&sc, &world, &names, out, &inputs, &mut staged)?;
-        if args.glb {
-            // glTF's own frame: metres, y up.
-            let (mesh, groups) = garment_mesh(&world, Up::Y, 1.0);
-            let placed: Vec<_> = (world.colliders.iter())
-                .map(|c| {
-                    let mut m = c.mesh.clone();
-                    crate::mesh::transform::change_up(&mut m, Up::Z, Up::Y);
-                    m
-                })
-                .collect();
-            let bodies: Vec<(&str, &crate::mesh::TriMesh)> =
-                names.iter().map(String::as_str).zip(&placed).collect();
-            let path = out.join(format!("{}.glb", super::drape::scene_stem(&sc)));
-            let rest = &world.model.rest;
-            staged.push(stage_glb(&path, &mesh, rest, &groups, &bodies, &inputs)?);
-            files.push(path.display().to_string());
-        }
-        if args.preview {
-            files.push(super::drape::stage_preview(
-                &world,
-                out,
-                to_units,
-                &inputs,
-                &mut staged,
-            )?);
-        }
-        io::commit(std::mem::take(&mut staged))?;
-        Ok((files, objects))
-    })();
-    let (files, object_files) = match written {
-        Ok(w) => w,
-        Err(e) => {
-            drop(staged);
-            if !existed {
-                let _ = std::fs::remove_dir(out);
-            }
-            return Err(e);
-        }
+    let o = Out {
+        args,
+        sc: &sc,
+        spec,
+        world: &world,
+        inputs: &inputs,
+        to_units,
     };
+    let (files, object_files) = write_outputs(&o)?;
     let report = GarmentSceneReport {
         scene: sc.path.display().to_string(),
         output_dir: out.display().to_string(),
@@ -202,6 +105,148 @@ pub(super) fn run(args: &DrapeArgs, sc: Scene, start: std::time::Instant) -> any
         args.json,
         print_summary,
     )
+}
+
+/// The scene's garment, once the flags are checked against it: a garment keeps no checkpoint
+/// (no `--resume`), and the output must be a directory.
+fn check_args<'a>(args: &DrapeArgs, sc: &'a Scene) -> anyhow::Result<&'a GarmentSpec> {
+    let Some(spec) = &sc.garment else {
+        bail!("{}: the scene has no [[garment]]", sc.path.display());
+    };
+    if args.resume {
+        bail!(
+            "--resume: {} sews a [[garment]], and a garment's run keeps no checkpoint (an interrupted one writes nothing); run it without --resume",
+            sc.path.display()
+        );
+    }
+    super::refuse_file_output(&args.output)?;
+    Ok(spec)
+}
+
+/// The pattern against the scene's objects before any simulation: the fit check (each ring
+/// too short a warning at once) and the placement's warning, printed and returned.
+fn check_pattern(
+    sc: &Scene,
+    spec: &GarmentSpec,
+    bodies: &[Collider],
+) -> anyhow::Result<(Option<FitCheck>, Vec<String>)> {
+    let settings = &spec.settings;
+    let fit = scene_fit_check(&spec.pattern, bodies, settings)?;
+    if let Some(f) = &fit {
+        warn_too_short(f);
+    }
+    let warnings: Vec<String> = placement_warning(&spec.pattern, bodies, settings)
+        .into_iter()
+        .collect();
+    for w in &warnings {
+        eprintln!("warning: {}: {w}", sc.path.display());
+    }
+    Ok((fit, warnings))
+}
+
+/// Sews and drapes the scene's garment on its objects; its errors are named after the scene
+/// (the pattern against the objects under the pattern's key).
+fn sew(sc: &Scene, spec: &GarmentSpec, bodies: Vec<Collider>) -> anyhow::Result<gd::Garment> {
+    match sew_interruptibly(&spec.pattern, bodies, &spec.settings)? {
+        // The pattern against the objects (panels facing into the body, panels that make no
+        // cloth): before any simulation, under the pattern's key.
+        Err(e @ (gd::GarmentError::FacingIn(_) | gd::GarmentError::Assemble(_))) => {
+            bail!("{}: key 'garment.pattern': {e}", sc.path.display())
+        }
+        Err(e) => bail!("{}: {e}", sc.path.display()),
+        Ok(g) => Ok(g),
+    }
+}
+
+/// What writing a garment scene's outputs reads: the arguments, the scene and its garment, the
+/// draped world, the inputs (never written over), the factor from metres to the scene's units.
+struct Out<'a> {
+    args: &'a DrapeArgs,
+    sc: &'a Scene,
+    spec: &'a GarmentSpec,
+    world: &'a sim::World,
+    inputs: &'a [&'a Path],
+    to_units: f64,
+}
+
+/// Stages the garment (OBJ, and PLY on request), the objects as placed, the glTF file and
+/// the preview, and puts them all in place; returns the files and each object's files. After
+/// a failure nothing is left (the output directory removed if the run created it, when empty).
+fn write_outputs(o: &Out) -> anyhow::Result<(Vec<String>, Vec<Vec<String>>)> {
+    let out = o.args.output.as_path();
+    let names = super::drape::object_names(o.sc, out);
+    let existed = out.exists();
+    let mut staged = Vec::new();
+    let written = (|| -> anyhow::Result<(Vec<String>, Vec<Vec<String>>)> {
+        std::fs::create_dir_all(out)
+            .map_err(|e| anyhow::anyhow!("cannot create {}: {e}", out.display()))?;
+        let mut files = stage_garment(o, &mut staged)?;
+        let objects = stage_objects(o.sc, o.world, &names, out, o.inputs, &mut staged)?;
+        if o.args.glb {
+            files.push(stage_scene_glb(o, &names, &mut staged)?);
+        }
+        if o.args.preview {
+            let (world, to_units) = (o.world, o.to_units);
+            let preview = super::drape::stage_preview(world, out, to_units, o.inputs, &mut staged);
+            files.push(preview?);
+        }
+        io::commit(std::mem::take(&mut staged))?;
+        Ok((files, objects))
+    })();
+    if written.is_err() {
+        drop(staged);
+        if !existed {
+            let _ = std::fs::remove_dir(out);
+        }
+    }
+    written
+}
+
+/// Stages the garment as `<garment>.obj` (a group per panel, the flat pattern as `vt`), and
+/// `.ply` when the scene asks, in the scene's units and frame; returns their paths.
+fn stage_garment(o: &Out, staged: &mut Vec<io::Staged>) -> anyhow::Result<Vec<String>> {
+    let (spec, out, to_units) = (o.spec, &o.args.output, o.to_units);
+    let (mesh, groups) = garment_mesh(o.world, Up::Z, to_units);
+    let rest: Vec<[f64; 2]> = (o.world.model.rest.iter())
+        .map(|q| [q.x * to_units, q.y * to_units])
+        .collect();
+    let mut files = Vec::new();
+    let path = out.join(format!("{}.obj", spec.name));
+    staged.push(io::stage_obj_with_rest(
+        &path, &mesh, &rest, &groups, o.inputs,
+    )?);
+    files.push(path.display().to_string());
+    if o.sc.ply {
+        let path = out.join(format!("{}.ply", spec.name));
+        staged.push(io::stage_mesh(&path, &mesh, &WriteOptions::default(), o.inputs)?.0);
+        files.push(path.display().to_string());
+    }
+    Ok(files)
+}
+
+/// Stages `<scene>.glb`: the garment and the objects as placed (named `names`), in glTF's
+/// own frame (metres, y up); returns its path.
+fn stage_scene_glb(
+    o: &Out,
+    names: &[String],
+    staged: &mut Vec<io::Staged>,
+) -> anyhow::Result<String> {
+    let (mesh, groups) = garment_mesh(o.world, Up::Y, 1.0);
+    let placed: Vec<_> = (o.world.colliders.iter())
+        .map(|c| {
+            let mut m = c.mesh.clone();
+            crate::mesh::transform::change_up(&mut m, Up::Z, Up::Y);
+            m
+        })
+        .collect();
+    let bodies: Vec<(&str, &TriMesh)> = names.iter().map(String::as_str).zip(&placed).collect();
+    let path = o
+        .args
+        .output
+        .join(format!("{}.glb", super::drape::scene_stem(o.sc)));
+    let rest = &o.world.model.rest;
+    staged.push(stage_glb(&path, &mesh, rest, &groups, &bodies, o.inputs)?);
+    Ok(path.display().to_string())
 }
 
 fn print_summary(r: &GarmentSceneReport) {
