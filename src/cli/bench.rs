@@ -171,26 +171,88 @@ struct ConvertBenchReport {
     speedup_vs_trimesh: Option<f64>,
 }
 
+/// The inputs of a convert benchmark: the flipped icosphere written as a binary STL.
+struct Generated {
+    /// The folder of the files: `--keep`'s, or the temporary one below.
+    dir: PathBuf,
+    /// The temporary folder (without `--keep`), removed when this is dropped.
+    _tmp: Option<tempfile::TempDir>,
+    /// The STL file.
+    stl: PathBuf,
+    /// The icosphere as written.
+    sphere: crate::mesh::TriMesh,
+    /// Its faces flipped.
+    flipped: usize,
+    /// The STL file's size.
+    stl_bytes: u64,
+}
+
 fn bench_convert(a: ConvertBench) -> anyhow::Result<()> {
     ensure!(
         (0.0..=1.0).contains(&a.flip_fraction),
         "--flip-fraction must be within 0..1"
     );
-    let tmp;
+    let say = |s: String| {
+        if !a.json {
+            println!("{s}");
+        }
+    };
+    let g = generate_input(&a)?;
+    say(format!(
+        "bench convert: icosphere level {}, {} triangles ({} flipped), binary STL {:.1} MB -> binary PLY, weld + orient",
+        a.level,
+        g.sphere.faces.len(),
+        g.flipped,
+        g.stl_bytes as f64 / 1e6
+    ));
+    let ply = g.dir.join("icosphere.ply");
+    let (secs, mibs) = time_converts(&a, &g, &ply, &say)?;
+    // The output must be right for the times to mean anything.
+    let (out, state) = check_output(&a, &g, &ply)?;
+    let med = median(&secs);
+    let peak = mibs.iter().cloned().fold(0.0, f64::max);
+    say(format!(
+        "  median {med:.3} s, peak memory {peak:.0} MiB; output {} vertices, {} faces, shell {}",
+        out.positions.len(),
+        out.faces.len(),
+        state
+    ));
+    let trimesh = match &a.trimesh {
+        Some(py) => Some(time_trimesh(py, &g, med, &say)?),
+        None => None,
+    };
+    let report = ConvertBenchReport {
+        triangles: g.sphere.faces.len(),
+        flipped_in_input: g.flipped,
+        stl_bytes: g.stl_bytes,
+        runs_seconds: secs,
+        runs_peak_mib: mibs,
+        median_seconds: med,
+        peak_mib: peak,
+        output_vertices: out.positions.len(),
+        output_faces: out.faces.len(),
+        output_shell_state: state,
+        speedup_vs_trimesh: trimesh.as_ref().map(|t| t.total / med),
+        trimesh,
+    };
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    }
+    Ok(())
+}
+
+/// The icosphere of `--level` with a `--flip-fraction` of its faces flipped (seed 42),
+/// written as `icosphere.stl` into `--keep` or a temporary folder.
+fn generate_input(a: &ConvertBench) -> anyhow::Result<Generated> {
+    let mut tmp = None;
     let dir = match &a.keep {
         Some(d) => {
             std::fs::create_dir_all(d)?;
             d.clone()
         }
-        None => {
-            tmp = tempfile::tempdir()?;
-            tmp.path().to_path_buf()
-        }
+        None => tmp.insert(tempfile::tempdir()?).path().to_path_buf(),
     };
     let stl = dir.join("icosphere.stl");
-    let ply = dir.join("icosphere.ply");
-    let log = dir.join("convert.log");
-
     let mut sphere = generate::icosphere(a.level);
     let mut rng = SplitMix(42);
     let mut flipped = 0;
@@ -202,27 +264,33 @@ fn bench_convert(a: ConvertBench) -> anyhow::Result<()> {
     }
     io::write_mesh(&stl, &sphere, &io::WriteOptions::default(), &[])?;
     let stl_bytes = std::fs::metadata(&stl)?.len();
-    let say = |s: String| {
-        if !a.json {
-            println!("{s}");
-        }
-    };
-    say(format!(
-        "bench convert: icosphere level {}, {} triangles ({} flipped), binary STL {:.1} MB -> binary PLY, weld + orient",
-        a.level,
-        sphere.faces.len(),
+    Ok(Generated {
+        dir,
+        _tmp: tmp,
+        stl,
+        sphere,
         flipped,
-        stl_bytes as f64 / 1e6
-    ));
+        stl_bytes,
+    })
+}
 
+/// Times `--runs` runs of `drapekit convert` from the STL to `ply` (each line said); returns
+/// each run's wall time and peak memory.
+fn time_converts(
+    a: &ConvertBench,
+    g: &Generated,
+    ply: &Path,
+    say: &dyn Fn(String),
+) -> anyhow::Result<(Vec<f64>, Vec<f64>)> {
+    let log = g.dir.join("convert.log");
     let exe = std::env::current_exe()?;
     let mut secs = Vec::new();
     let mut mibs = Vec::new();
     say("  run   wall s   peak MiB".into());
     for r in 0..a.runs {
-        let _ = std::fs::remove_file(&ply);
+        let _ = std::fs::remove_file(ply);
         let mut cmd = Command::new(&exe);
-        cmd.arg("convert").arg(&stl).arg("-o").arg(&ply);
+        cmd.arg("convert").arg(&g.stl).arg("-o").arg(ply);
         let m = measure(cmd, &log)?;
         say(format!(
             "  {:>3}   {:>6.3}   {:>8.1}",
@@ -233,14 +301,23 @@ fn bench_convert(a: ConvertBench) -> anyhow::Result<()> {
         secs.push(m.seconds);
         mibs.push(m.peak_mib);
     }
-    // The output must be right for the times to mean anything.
-    let out = io::read_mesh(&ply, &ReadOptions::default())?.mesh;
+    Ok((secs, mibs))
+}
+
+/// The converted mesh and its shell state, refused unless it has the sphere's faces and
+/// vertices and is closed.
+fn check_output(
+    a: &ConvertBench,
+    g: &Generated,
+    ply: &Path,
+) -> anyhow::Result<(crate::mesh::TriMesh, ShellState)> {
+    let out = io::read_mesh(ply, &ReadOptions::default())?.mesh;
     let d = diagnose(&out);
     ensure!(
-        out.faces.len() == sphere.faces.len(),
+        out.faces.len() == g.sphere.faces.len(),
         "output has {} faces, expected {}",
         out.faces.len(),
-        sphere.faces.len()
+        g.sphere.faces.len()
     );
     ensure!(
         out.positions.len() == 10 * 4usize.pow(a.level) + 2,
@@ -252,78 +329,59 @@ fn bench_convert(a: ConvertBench) -> anyhow::Result<()> {
         "output shell state is {}, expected closed",
         d.shell_state
     );
-    let med = median(&secs);
-    let peak = mibs.iter().cloned().fold(0.0, f64::max);
-    say(format!(
-        "  median {med:.3} s, peak memory {peak:.0} MiB; output {} vertices, {} faces, shell {}",
-        out.positions.len(),
-        out.faces.len(),
-        d.shell_state
-    ));
+    Ok((out, d.shell_state))
+}
 
-    let mut trimesh = None;
-    if let Some(py) = &a.trimesh {
-        let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/trimesh_convert.py");
-        let tply = dir.join("icosphere_trimesh.ply");
-        say(format!(
-            "  trimesh: running {} (this takes minutes) ...",
-            script.display()
-        ));
-        let start = Instant::now();
-        let o = Command::new(py)
-            .arg(&script)
-            .arg(&stl)
-            .arg(&tply)
-            .output()
-            .context("cannot run the trimesh script")?;
-        let wall = start.elapsed().as_secs_f64();
-        ensure!(
-            o.status.success(),
-            "the trimesh script failed: {}",
-            String::from_utf8_lossy(&o.stderr)
-        );
-        let v: serde_json::Value =
-            serde_json::from_slice(&o.stdout).context("the trimesh script printed no JSON")?;
-        let f = |k: &str| v[k].as_f64().unwrap_or(f64::NAN);
-        let t = TrimeshTimes {
-            version: v["version"].as_str().unwrap_or("?").into(),
-            load: f("load"),
-            merge_vertices: f("merge_vertices"),
-            fix_normals: f("fix_normals"),
-            export: f("export"),
-            total: f("total"),
-            wall,
-            faces: v["faces"].as_u64().unwrap_or(0),
-            vertices: v["vertices"].as_u64().unwrap_or(0),
-            watertight: v["watertight"].as_bool().unwrap_or(false),
-            winding_consistent: v["winding_consistent"].as_bool().unwrap_or(false),
-        };
-        say(format!(
-            "  trimesh {}: load {:.2} s, merge_vertices {:.2} s, fix_normals {:.2} s, export {:.2} s; total {:.2} s ({} faces, {} vertices, watertight {}, winding consistent {})",
-            t.version, t.load, t.merge_vertices, t.fix_normals, t.export, t.total, t.faces, t.vertices, t.watertight, t.winding_consistent
-        ));
-        say(format!(
-            "  speed-up: {:.0}x (trimesh total / drapekit median wall)",
-            t.total / med
-        ));
-        trimesh = Some(t);
-    }
-    let report = ConvertBenchReport {
-        triangles: sphere.faces.len(),
-        flipped_in_input: flipped,
-        stl_bytes,
-        runs_seconds: secs,
-        runs_peak_mib: mibs,
-        median_seconds: med,
-        peak_mib: peak,
-        output_vertices: out.positions.len(),
-        output_faces: out.faces.len(),
-        output_shell_state: d.shell_state,
-        speedup_vs_trimesh: trimesh.as_ref().map(|t| t.total / med),
-        trimesh,
+/// Times trimesh (`tools/trimesh_convert.py` run by the Python `py`) on the same STL, and
+/// says its times and the speed-up against drapekit's median `med`.
+fn time_trimesh(
+    py: &Path,
+    g: &Generated,
+    med: f64,
+    say: &dyn Fn(String),
+) -> anyhow::Result<TrimeshTimes> {
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/trimesh_convert.py");
+    let tply = g.dir.join("icosphere_trimesh.ply");
+    say(format!(
+        "  trimesh: running {} (this takes minutes) ...",
+        script.display()
+    ));
+    let start = Instant::now();
+    let o = Command::new(py)
+        .arg(&script)
+        .arg(&g.stl)
+        .arg(&tply)
+        .output()
+        .context("cannot run the trimesh script")?;
+    let wall = start.elapsed().as_secs_f64();
+    ensure!(
+        o.status.success(),
+        "the trimesh script failed: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let v: serde_json::Value =
+        serde_json::from_slice(&o.stdout).context("the trimesh script printed no JSON")?;
+    let f = |k: &str| v[k].as_f64().unwrap_or(f64::NAN);
+    let t = TrimeshTimes {
+        version: v["version"].as_str().unwrap_or("?").into(),
+        load: f("load"),
+        merge_vertices: f("merge_vertices"),
+        fix_normals: f("fix_normals"),
+        export: f("export"),
+        total: f("total"),
+        wall,
+        faces: v["faces"].as_u64().unwrap_or(0),
+        vertices: v["vertices"].as_u64().unwrap_or(0),
+        watertight: v["watertight"].as_bool().unwrap_or(false),
+        winding_consistent: v["winding_consistent"].as_bool().unwrap_or(false),
     };
-    if a.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
-    }
-    Ok(())
+    say(format!(
+        "  trimesh {}: load {:.2} s, merge_vertices {:.2} s, fix_normals {:.2} s, export {:.2} s; total {:.2} s ({} faces, {} vertices, watertight {}, winding consistent {})",
+        t.version, t.load, t.merge_vertices, t.fix_normals, t.export, t.total, t.faces, t.vertices, t.watertight, t.winding_consistent
+    ));
+    say(format!(
+        "  speed-up: {:.0}x (trimesh total / drapekit median wall)",
+        t.total / med
+    ));
+    Ok(t)
 }
