@@ -419,6 +419,24 @@ pub fn fit_check(
     body: &TriMesh,
     opts: &FitCheckOptions,
 ) -> Result<FitCheck, FitCheckError> {
+    check_options(opts)?;
+    let (edges, found) = rings(pattern);
+    let span = body.bbox().map_or((0.0, 0.0), |b| (b.min.z, b.max.z));
+    let out: Vec<Ring> = (found.into_iter())
+        .map(|(kind, ring)| judge(kind, trace(pattern, &edges, &ring), body, opts, span))
+        .collect();
+    let too_short = out.iter().filter(|r| r.fits == Some(false)).count();
+    Ok(FitCheck {
+        strain_allowance: opts.strain,
+        clearance_m: opts.clearance,
+        step_m: opts.step,
+        rings: out,
+        too_short,
+    })
+}
+
+/// Refuses a negative or non-finite clearance or strain, or a step that is not positive.
+fn check_options(opts: &FitCheckOptions) -> Result<(), FitCheckError> {
     let bad = |name, value, rule| Err(FitCheckError::Option { name, value, rule });
     if !(opts.clearance.is_finite() && opts.clearance >= 0.0) {
         return bad("clearance", opts.clearance, "0 or more, m");
@@ -429,133 +447,183 @@ pub fn fit_check(
     if !(opts.step.is_finite() && opts.step > 0.0) {
         return bad("step", opts.step, "a positive length, m");
     }
-    let (edges, found) = rings(pattern);
-    let (bottom, top) = body.bbox().map_or((0.0, 0.0), |b| (b.min.z, b.max.z));
-    let mut out = Vec::new();
-    for (kind, ring) in found {
-        let mut poly: Vec<Point3> = Vec::new();
-        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-        let (mut length, mut names, mut panels) = (0.0, Vec::new(), Vec::<String>::new());
-        for &(e, forward) in &ring {
-            let sides = &edges[e].sides;
-            let short = short_side(pattern, sides);
-            length += length_m(pattern, &sides[short]);
-            names.push(joined_name(pattern, sides));
-            for (k, s) in sides.iter().enumerate() {
-                let pname = &pattern.panels[s.panel].name;
-                if !panels.contains(pname) {
-                    panels.push(pname.clone());
+    Ok(())
+}
+
+/// A ring traced through the pattern as placed.
+struct Traced {
+    /// Its outline: each garment edge's shorter side, in the ring's order (m, z up).
+    poly: Vec<Point3>,
+    /// The lowest height of every side's samples, m.
+    lo: f64,
+    /// ... and the highest.
+    hi: f64,
+    /// Its length, m: each garment edge by its shorter side.
+    length: f64,
+    /// Its edges' names.
+    names: Vec<String>,
+    /// The panels it runs along, in the order met.
+    panels: Vec<String>,
+}
+
+/// Traces `ring` (garment edges of `edges`, each walked forward or not) through the pattern
+/// as placed.
+fn trace(pattern: &Pattern, edges: &[GEdge], ring: &Walk) -> Traced {
+    let mut poly: Vec<Point3> = Vec::new();
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    let (mut length, mut names, mut panels) = (0.0, Vec::new(), Vec::<String>::new());
+    for &(e, forward) in ring {
+        let sides = &edges[e].sides;
+        let short = short_side(pattern, sides);
+        length += length_m(pattern, &sides[short]);
+        names.push(joined_name(pattern, sides));
+        for (k, s) in sides.iter().enumerate() {
+            let pname = &pattern.panels[s.panel].name;
+            if !panels.contains(pname) {
+                panels.push(pname.clone());
+            }
+            let mut pts = placed(pattern, s);
+            for p in &pts {
+                lo = lo.min(p.z);
+                hi = hi.max(p.z);
+            }
+            if k == short {
+                // The garment edge runs from `from` to `to` along side 0; side 1 of a
+                // stitch runs the other way unless `right_wrong`.
+                let reversed = k == 1 && !edges[e].right_wrong;
+                if forward == reversed {
+                    pts.reverse();
                 }
-                let mut pts = placed(pattern, s);
-                for p in &pts {
-                    lo = lo.min(p.z);
-                    hi = hi.max(p.z);
-                }
-                if k == short {
-                    // The garment edge runs from `from` to `to` along side 0; side 1 of a
-                    // stitch runs the other way unless `right_wrong`.
-                    let reversed = k == 1 && !edges[e].right_wrong;
-                    if forward == reversed {
-                        pts.reverse();
-                    }
-                    poly.extend(pts);
-                }
+                poly.extend(pts);
             }
         }
-        let n = newell_normal(poly.iter().copied());
-        let tilt = if n.norm() > 0.0 {
-            (n.z.abs() / n.norm()).clamp(-1.0, 1.0).acos().to_degrees()
-        } else {
-            90.0
-        };
-        let outline: Vec<Point2> = poly.iter().map(|p| Point2::new(p.x, p.y)).collect();
-        let available = length * (1.0 + opts.strain);
-        let extra = std::f64::consts::TAU * opts.clearance;
-        let mut r = Ring {
-            kind,
-            edges: names,
-            panels,
-            length_m: length,
-            height_m: [lo, hi],
-            tilt_deg: tilt,
-            judged: false,
-            note: None,
-            body_girth_m: None,
-            needed_m: None,
-            available_m: available,
-            fits: None,
-            narrow_enough_above_m: None,
-            narrow_enough_below_m: None,
-        };
-        if tilt > MAX_JUDGED_TILT_DEG {
-            r.note = Some(format!(
-                "tilted {tilt:.0} degrees from horizontal (over {MAX_JUDGED_TILT_DEG}): its plane \
-                 does not cut what it goes round"
-            ));
-            out.push(r);
-            continue;
-        }
-        // A tilted ring: the body and the ring turned so that its normal is vertical.
-        let turned = (tilt > MAX_TILT_DEG).then(|| {
-            let up = if n.z < 0.0 { -n } else { n };
-            let turn =
-                Rotation3::rotation_between(&up, &Vec3::z()).unwrap_or_else(Rotation3::identity);
-            r.note = Some(format!(
-                "tilted {tilt:.0} degrees from horizontal: judged in its own plane"
-            ));
-            let positions = body.positions.iter().map(|p| turn * p).collect();
-            (turn, TriMesh::new(positions, body.faces.clone()))
-        });
-        let (body, outline, lo, hi) = match &turned {
-            Some((turn, b)) => {
-                let q: Vec<Point3> = poly.iter().map(|p| turn * p).collect();
-                let (lo, hi) = q
-                    .iter()
-                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), p| {
-                        (l.min(p.z), h.max(p.z))
-                    });
-                (b, q.iter().map(|p| Point2::new(p.x, p.y)).collect(), lo, hi)
-            }
-            None => (body, outline, lo, hi),
-        };
-        let steps = ((hi - lo) / opts.step).ceil().max(0.0) as usize;
-        let girths: Vec<f64> = (0..=steps)
-            .map(|i| (lo + i as f64 * opts.step).min(hi))
-            .filter_map(|z| girth_inside(body, z, &outline))
-            .collect();
-        if girths.is_empty() {
-            r.note = Some("goes round no part of the body at its height".into());
-            out.push(r);
-            continue;
-        }
-        let g_min = girths.iter().copied().fold(f64::INFINITY, f64::min);
-        let g_max = girths.iter().copied().fold(0.0, f64::max);
-        let needed = g_min + extra;
-        let fits = available >= needed;
-        r.judged = true;
-        r.body_girth_m = Some([g_min, g_max]);
-        r.needed_m = Some(needed);
-        r.fits = Some(fits);
-        if !fits && turned.is_none() {
-            let narrow =
-                |z: f64| girth_inside(body, z, &outline).is_some_and(|g| g + extra <= available);
-            let up = ((top - hi) / opts.step).floor().max(0.0) as usize;
-            r.narrow_enough_above_m = (1..=up)
-                .map(|i| hi + i as f64 * opts.step)
-                .find(|&z| narrow(z));
-            let down = ((lo - bottom) / opts.step).floor().max(0.0) as usize;
-            r.narrow_enough_below_m = (1..=down)
-                .map(|i| lo - i as f64 * opts.step)
-                .find(|&z| narrow(z));
-        }
-        out.push(r);
     }
-    let too_short = out.iter().filter(|r| r.fits == Some(false)).count();
-    Ok(FitCheck {
-        strain_allowance: opts.strain,
-        clearance_m: opts.clearance,
-        step_m: opts.step,
-        rings: out,
-        too_short,
-    })
+    Traced {
+        poly,
+        lo,
+        hi,
+        length,
+        names,
+        panels,
+    }
+}
+
+/// The Newell normal of `poly` and its angle from the vertical, degrees (90 when it has none).
+fn tilt_of(poly: &[Point3]) -> (Vec3, f64) {
+    let n = newell_normal(poly.iter().copied());
+    let tilt = if n.norm() > 0.0 {
+        (n.z.abs() / n.norm()).clamp(-1.0, 1.0).acos().to_degrees()
+    } else {
+        90.0
+    };
+    (n, tilt)
+}
+
+/// The ring `t` judged against `body` (whose lowest and highest heights are `span`): listed
+/// only when tilted past [`MAX_JUDGED_TILT_DEG`], judged in its own plane past
+/// [`MAX_TILT_DEG`], else as it sits.
+fn judge(
+    kind: RingKind,
+    t: Traced,
+    body: &TriMesh,
+    opts: &FitCheckOptions,
+    span: (f64, f64),
+) -> Ring {
+    let (n, tilt) = tilt_of(&t.poly);
+    let mut r = Ring {
+        kind,
+        edges: t.names,
+        panels: t.panels,
+        length_m: t.length,
+        height_m: [t.lo, t.hi],
+        tilt_deg: tilt,
+        judged: false,
+        note: None,
+        body_girth_m: None,
+        needed_m: None,
+        available_m: t.length * (1.0 + opts.strain),
+        fits: None,
+        narrow_enough_above_m: None,
+        narrow_enough_below_m: None,
+    };
+    if tilt > MAX_JUDGED_TILT_DEG {
+        r.note = Some(format!(
+            "tilted {tilt:.0} degrees from horizontal (over {MAX_JUDGED_TILT_DEG}): its plane \
+             does not cut what it goes round"
+        ));
+        return r;
+    }
+    if tilt > MAX_TILT_DEG {
+        judge_tilted(&mut r, body, &t.poly, n, opts);
+        return r;
+    }
+    let outline: Vec<Point2> = t.poly.iter().map(|p| Point2::new(p.x, p.y)).collect();
+    judge_girth(&mut r, body, &outline, [t.lo, t.hi], opts, Some(span));
+    r
+}
+
+/// Judges the ring `r` (its outline `poly`, its normal `n`) in its own plane: the body and
+/// the ring turned so that `n` is vertical.
+fn judge_tilted(r: &mut Ring, body: &TriMesh, poly: &[Point3], n: Vec3, opts: &FitCheckOptions) {
+    let up = if n.z < 0.0 { -n } else { n };
+    let turn = Rotation3::rotation_between(&up, &Vec3::z()).unwrap_or_else(Rotation3::identity);
+    r.note = Some(format!(
+        "tilted {:.0} degrees from horizontal: judged in its own plane",
+        r.tilt_deg
+    ));
+    let positions = body.positions.iter().map(|p| turn * p).collect();
+    let body = TriMesh::new(positions, body.faces.clone());
+    let q: Vec<Point3> = poly.iter().map(|p| turn * p).collect();
+    let (lo, hi) = q
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), p| {
+            (l.min(p.z), h.max(p.z))
+        });
+    let outline: Vec<Point2> = q.iter().map(|p| Point2::new(p.x, p.y)).collect();
+    judge_girth(r, &body, &outline, [lo, hi], opts, None);
+}
+
+/// Judges `r` by the girths of `body` inside `outline` over the heights `lo_hi`, every
+/// `opts.step`. A ring judged as it sits (`span`: the body's lowest and highest heights)
+/// that does not fit gets the nearest heights above and below where the body is narrow
+/// enough.
+fn judge_girth(
+    r: &mut Ring,
+    body: &TriMesh,
+    outline: &[Point2],
+    [lo, hi]: [f64; 2],
+    opts: &FitCheckOptions,
+    span: Option<(f64, f64)>,
+) {
+    let extra = std::f64::consts::TAU * opts.clearance;
+    let available = r.available_m;
+    let steps = ((hi - lo) / opts.step).ceil().max(0.0) as usize;
+    let girths: Vec<f64> = (0..=steps)
+        .map(|i| (lo + i as f64 * opts.step).min(hi))
+        .filter_map(|z| girth_inside(body, z, outline))
+        .collect();
+    if girths.is_empty() {
+        r.note = Some("goes round no part of the body at its height".into());
+        return;
+    }
+    let g_min = girths.iter().copied().fold(f64::INFINITY, f64::min);
+    let g_max = girths.iter().copied().fold(0.0, f64::max);
+    let needed = g_min + extra;
+    let fits = available >= needed;
+    r.judged = true;
+    r.body_girth_m = Some([g_min, g_max]);
+    r.needed_m = Some(needed);
+    r.fits = Some(fits);
+    let Some((bottom, top)) = span.filter(|_| !fits) else {
+        return;
+    };
+    let narrow = |z: f64| girth_inside(body, z, outline).is_some_and(|g| g + extra <= available);
+    let up = ((top - hi) / opts.step).floor().max(0.0) as usize;
+    r.narrow_enough_above_m = (1..=up)
+        .map(|i| hi + i as f64 * opts.step)
+        .find(|&z| narrow(z));
+    let down = ((lo - bottom) / opts.step).floor().max(0.0) as usize;
+    r.narrow_enough_below_m = (1..=down)
+        .map(|i| lo - i as f64 * opts.step)
+        .find(|&z| narrow(z));
 }
