@@ -2366,3 +2366,33 @@ fn a_bad_seam_ramp_is_refused_by_name() {
         assert!(!o.status.success() && stderr.contains(message), "{stderr}");
     }
 }
+
+#[test]
+fn a_garment_run_that_cannot_write_one_output_leaves_none() {
+    // Every output is staged and put in place together: a `panels` file where the panels'
+    // folder goes, or a folder where the body goes, refuses the run with nothing of it left
+    // (the garment was written before either).
+    let body = common::cylinder(0.186, 0.5, 1.5, 48);
+    for (blocker, panels) in [("panels", true), ("column.obj", false)] {
+        let (dir, mut args) = garment_run(&tube(), &body);
+        let out = dir.path().join("out");
+        std::fs::create_dir(&out).unwrap();
+        if panels {
+            std::fs::write(out.join(blocker), "x").unwrap();
+            args.push("--panels".into());
+        } else {
+            std::fs::create_dir(out.join(blocker)).unwrap();
+        }
+        args.extend(["--sew-max", "0.02", "--settle-max", "0.02"].map(String::from));
+        let a: Vec<&str> = args.iter().map(String::as_str).collect();
+        let o = common::run(&a);
+        let (_, stderr) = common::text(&o);
+        assert!(!o.status.success(), "{blocker}: {stderr}");
+        let mut left: Vec<String> = std::fs::read_dir(&out)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        left.sort();
+        assert_eq!(left, [blocker], "{blocker}: {stderr}");
+    }
+}

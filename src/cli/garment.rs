@@ -537,18 +537,20 @@ fn panel_meshes(
     panels
 }
 
-/// Writes each panel alone into `dir` (`<panel>.obj`). Returns the files written.
-fn write_panels(
+/// Stages each panel alone into `dir` (`<panel>.obj`; the folder made if need be). Returns
+/// their paths.
+fn stage_panels(
     dir: &Path,
     mesh: &TriMesh,
     groups: &[(String, usize, usize)],
     inputs: &[&Path],
+    staged: &mut Vec<io::Staged>,
 ) -> anyhow::Result<Vec<String>> {
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     let mut files = Vec::new();
     for (name, panel, _) in panel_meshes(mesh, groups) {
         let path = dir.join(format!("{name}.obj"));
-        io::write_mesh(&path, &panel, &io::WriteOptions::default(), inputs)?;
+        staged.push(io::stage_mesh(&path, &panel, &io::WriteOptions::default(), inputs)?.0);
         files.push(path.display().to_string());
     }
     Ok(files)
@@ -586,26 +588,13 @@ pub(super) fn stage_glb(
     Ok(crate::io::gltf::stage_scene(path, &scene, inputs)?)
 }
 
-/// Writes an OBJ with a group per panel and each particle's flat pattern place (m) as `vt`.
-fn write_groups(
-    path: &Path,
-    mesh: &TriMesh,
-    rest: &[crate::math::Point2],
-    groups: &[(String, usize, usize)],
-    inputs: &[&Path],
-) -> anyhow::Result<()> {
-    let rest: Vec<[f64; 2]> = rest.iter().map(|q| [q.x, q.y]).collect();
-    io::stage_obj_with_rest(path, mesh, &rest, groups, inputs)?.commit()?;
-    Ok(())
-}
-
-/// Writes `OUT_DIR/<garment>.png`: the garment on the body, y up, from the front.
-fn write_preview(
+/// Stages `OUT_DIR/<garment>.png`: the garment on the body, y up, from the front.
+fn stage_preview(
     path: &Path,
     garment: &TriMesh,
     body: &TriMesh,
     inputs: &[&Path],
-) -> anyhow::Result<()> {
+) -> anyhow::Result<io::Staged> {
     use super::render::{CLOTH, OBJECT};
     use crate::render::{default_lift, Item};
     let lift = default_lift(garment.positions.iter().chain(&body.positions));
@@ -613,9 +602,14 @@ fn write_preview(
         Item::cloth(garment, CLOTH, None, lift),
         Item::object(body, OBJECT),
     ];
-    super::render::stage_preview(path, &items, crate::render::View::Front, Up::Y, inputs)?
-        .commit()?;
-    Ok(())
+    let view = crate::render::View::Front;
+    Ok(super::render::stage_preview(
+        path,
+        &items,
+        view,
+        Up::Y,
+        inputs,
+    )?)
 }
 
 /// A sewn and draped garment measured and judged.
@@ -772,8 +766,36 @@ fn write_outputs(
     world: &sim::World,
     inputs: &[&Path],
 ) -> anyhow::Result<Vec<String>> {
-    std::fs::create_dir_all(&args.output)
-        .with_context(|| format!("cannot create {}", args.output.display()))?;
+    let out = &args.output;
+    let existed = (out.exists(), out.join("panels").exists());
+    std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
+    let mut staged = Vec::new();
+    let files = stage_outputs(args, world, inputs, &mut staged).and_then(|files| {
+        io::commit(std::mem::take(&mut staged))?;
+        Ok(files)
+    });
+    if files.is_err() {
+        // Nothing of this run is left: its temporary files go, and the folders it made.
+        drop(staged);
+        if !existed.1 {
+            let _ = std::fs::remove_dir(out.join("panels"));
+        }
+        if !existed.0 {
+            let _ = std::fs::remove_dir(out);
+        }
+    }
+    files
+}
+
+/// Stages every output into `staged`: the garment (`<garment>.obj`), each panel alone on
+/// request, the body as placed, and the glTF file and the preview on request; returns their
+/// paths. Nothing is in place until they are committed together.
+fn stage_outputs(
+    args: &GarmentArgs,
+    world: &sim::World,
+    inputs: &[&Path],
+    staged: &mut Vec<io::Staged>,
+) -> anyhow::Result<Vec<String>> {
     let name = file_stem(&args.pattern).unwrap_or_else(|| "garment".into());
     let name = name
         .strip_suffix("_specification")
@@ -781,36 +803,44 @@ fn write_outputs(
         .to_string();
     let (mesh, groups) = garment_mesh(world, Up::Y, 1.0);
     let garment_path = args.output.join(format!("{name}.obj"));
-    write_groups(&garment_path, &mesh, &world.model.rest, &groups, inputs)?;
+    let rest = &world.model.rest;
+    let flat: Vec<[f64; 2]> = rest.iter().map(|q| [q.x, q.y]).collect();
+    staged.push(io::stage_obj_with_rest(
+        &garment_path,
+        &mesh,
+        &flat,
+        &groups,
+        inputs,
+    )?);
     let mut files = vec![garment_path.display().to_string()];
     if args.panels {
         let dir = args.output.join("panels");
-        files.extend(write_panels(&dir, &mesh, &groups, inputs)?);
+        files.extend(stage_panels(&dir, &mesh, &groups, inputs, staged)?);
     }
-    let (body_name, body_mesh, body_path) = write_body(args, world, &name, inputs)?;
+    let (body_name, body_mesh, body_path) = stage_body(args, world, &name, inputs, staged)?;
     files.push(body_path);
     if args.glb {
         let path = args.output.join(format!("{name}.glb"));
-        let rest = &world.model.rest;
         let bodies = [(body_name.as_str(), &body_mesh)];
-        stage_glb(&path, &mesh, rest, &groups, &bodies, inputs)?.commit()?;
+        staged.push(stage_glb(&path, &mesh, rest, &groups, &bodies, inputs)?);
         files.push(path.display().to_string());
     }
     if args.preview {
         let p = args.output.join(format!("{name}.png"));
-        write_preview(&p, &mesh, &body_mesh, inputs)?;
+        staged.push(stage_preview(&p, &mesh, &body_mesh, inputs)?);
         files.push(p.display().to_string());
     }
     Ok(files)
 }
 
-/// Writes the body as placed (y up) as `<body>.obj`, named after its file unless the garment
+/// Stages the body as placed (y up) as `<body>.obj`, named after its file unless the garment
 /// (`garment`) has that name; returns its name, its mesh and its path.
-fn write_body(
+fn stage_body(
     args: &GarmentArgs,
     world: &sim::World,
     garment: &str,
     inputs: &[&Path],
+    staged: &mut Vec<io::Staged>,
 ) -> anyhow::Result<(String, TriMesh, String)> {
     let mut body_mesh = world.colliders[0].mesh.clone();
     change_up(&mut body_mesh, Up::Z, Up::Y);
@@ -819,7 +849,7 @@ fn write_body(
     let body_name = io::unique_file_names(&[body_name], &taken, "body").remove(0);
     let body_path = args.output.join(format!("{body_name}.obj"));
     let options = io::WriteOptions::default();
-    io::write_mesh(&body_path, &body_mesh, &options, inputs)?;
+    staged.push(io::stage_mesh(&body_path, &body_mesh, &options, inputs)?.0);
     Ok((body_name, body_mesh, body_path.display().to_string()))
 }
 
