@@ -603,13 +603,7 @@ fn stage_preview(
         Item::object(body, OBJECT),
     ];
     let view = crate::render::View::Front;
-    Ok(super::render::stage_preview(
-        path,
-        &items,
-        view,
-        Up::Y,
-        inputs,
-    )?)
+    super::render::stage_preview(path, &items, view, Up::Y, inputs)
 }
 
 /// A sewn and draped garment measured and judged.
