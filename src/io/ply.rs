@@ -158,7 +158,16 @@ fn parse_header(bytes: &[u8]) -> Result<Header, HeaderError> {
             Some(b"end_header") => break,
             Some(b"comment") | Some(b"obj_info") => {}
             Some(b"format") => encoding = Some(format_line(ln, line, &w)?),
-            Some(b"element") => elements.push(element_line(ln, line, &w)?),
+            Some(b"element") => {
+                let el = element_line(ln, line, &w)?;
+                if matches!(el.name.as_str(), "vertex" | "face")
+                    && elements.iter().any(|e| e.name == el.name)
+                {
+                    let what = "a second element of this name: one 'vertex' and one 'face' element are read";
+                    return Err(header_err(ln, line, what));
+                }
+                elements.push(el);
+            }
             Some(b"property") => property_line(ln, line, &w, elements.last_mut())?,
             Some(_) => warnings.push(format!(
                 "header line {ln} skipped: '{}' is not a PLY header keyword",
@@ -167,8 +176,9 @@ fn parse_header(bytes: &[u8]) -> Result<Header, HeaderError> {
         }
     }
     let Some(encoding) = encoding else {
+        // No line holds it: the file is named, not a line.
         return Err((
-            Location::Line(2),
+            Location::File,
             ProblemKind::PlyFormat {
                 found: "(no format line)".into(),
             },
@@ -1063,6 +1073,24 @@ mod tests {
             e,
             "p.ply: 2 problems in this PLY file:\np.ply:10: non-finite coordinate NaN\np.ply:14: element 'face' 0 has 3 values on its line; its properties need at least 4"
         );
+    }
+
+    #[test]
+    fn a_second_vertex_or_face_element_is_refused_at_its_line() {
+        // A second face element replaced the first's faces (and misplaced their lines).
+        for (name, second) in [("vertex", 5), ("face", 9)] {
+            let head = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\n";
+            let mut lines: Vec<&str> = head.lines().collect();
+            let extra = format!("element {name} 1");
+            lines.insert(second - 1, &extra);
+            let text = format!("{}\nend_header\n", lines.join("\n"));
+            let e = read_bytes(text.as_bytes()).unwrap_err().to_string();
+            assert!(
+                e.starts_with(&format!("p.ply:{second}: "))
+                    && e.contains("a second element of this name"),
+                "{name}: {e}"
+            );
+        }
     }
 
     #[test]
