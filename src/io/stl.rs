@@ -15,7 +15,7 @@
 //! an 80-byte header that does not start with `solid`, the normal from the winding) or ASCII
 //! (each number in its shortest exact `f64` form, so ASCII output round-trips bit for bit).
 
-use super::error::{malformed, IoError, Location, ProblemKind};
+use super::error::{malformed, IoError, Location, ProblemKind, Problems};
 use super::text::{self, show};
 use super::{ReadInfo, ReadOptions, ReadOutput};
 use crate::math::Point3;
@@ -213,6 +213,7 @@ fn read_ascii(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<ReadOutpu
             break;
         }
     }
+    std::mem::take(&mut r.problems).check(path, ASCII_FMT)?;
     Ok(r.finish(opts))
 }
 
@@ -225,6 +226,9 @@ struct AsciiReader<'a> {
     solids: usize,
     nan_normals: usize,
     warnings: Vec<String>,
+    /// The problems read past (a coordinate or normal that is not a number, a loop of fewer
+    /// than three corners); a structural one ends the read with them.
+    problems: Problems,
 }
 
 impl<'a> AsciiReader<'a> {
@@ -242,16 +246,22 @@ impl<'a> AsciiReader<'a> {
             solids: 0,
             nan_normals: 0,
             warnings: Vec::new(),
+            problems: Problems::default(),
         }
     }
 
-    /// The error `kind` at `line`.
-    fn err(&self, line: u64, kind: ProblemKind) -> IoError {
-        malformed(self.path, ASCII_FMT, Location::Line(line), kind)
+    /// The error `kind` at `line` that ends the read, with the problems read past before it.
+    fn err(&mut self, line: u64, kind: ProblemKind) -> IoError {
+        let mut problems = std::mem::take(&mut self.problems);
+        problems.push(Location::Line(line), kind);
+        match problems.check(self.path, ASCII_FMT) {
+            Err(e) => e,
+            Ok(()) => unreachable!("a problem was just recorded"),
+        }
     }
 
     /// The error of finding `found` at `line` where `expected` should be.
-    fn expected(&self, line: u64, expected: &str, found: &[u8]) -> IoError {
+    fn expected(&mut self, line: u64, expected: &str, found: &[u8]) -> IoError {
         let kind = ProblemKind::Expected {
             expected: expected.into(),
             found: show(found),
@@ -261,12 +271,15 @@ impl<'a> AsciiReader<'a> {
 
     /// The next token and its line; the file ending is an error naming what was `expected`.
     fn next_or(&mut self, expected: &str) -> Result<(&'a [u8], u64), IoError> {
-        self.tk.next().ok_or_else(|| {
-            let kind = ProblemKind::UnexpectedEof {
-                expected: expected.into(),
-            };
-            self.err(self.tk.line, kind)
-        })
+        match self.tk.next() {
+            Some(t) => Ok(t),
+            None => {
+                let kind = ProblemKind::UnexpectedEof {
+                    expected: expected.into(),
+                };
+                Err(self.err(self.tk.line, kind))
+            }
+        }
     }
 
     /// Reads the keyword `word` (any case).
@@ -327,7 +340,9 @@ impl<'a> AsciiReader<'a> {
         self.expect_word("loop")?;
         let ring = self.ring()?;
         self.expect_word("endfacet")?;
-        self.polys.push(ring);
+        if let Some(ring) = ring {
+            self.polys.push(ring);
+        }
         Ok(())
     }
 
@@ -340,40 +355,54 @@ impl<'a> AsciiReader<'a> {
             match text::number(v) {
                 Ok(_) => {}
                 Err(ProblemKind::NonFinite { .. }) => finite = false,
-                Err(k) => return Err(self.err(vl, k)),
+                Err(k) => self.problems.push(Location::Line(vl), k),
             }
         }
         self.nan_normals += usize::from(!finite);
         Ok(())
     }
 
-    /// Reads a loop's `vertex` lines up to `endloop` (at least three); returns their indices.
-    fn ring(&mut self) -> Result<Vec<u32>, IoError> {
+    /// Reads a loop's `vertex` lines up to `endloop`; returns their indices, or `None` (the
+    /// problem recorded) when a corner is not a point or there are fewer than three.
+    fn ring(&mut self) -> Result<Option<Vec<u32>>, IoError> {
         let mut ring = Vec::with_capacity(3);
+        let mut usable = true;
         loop {
             let (t, l) = self.next_or("'vertex' or 'endloop'")?;
             if t.eq_ignore_ascii_case(b"endloop") {
-                if ring.len() < 3 {
-                    return Err(self.err(l, ProblemKind::TooFewCorners { found: ring.len() }));
+                if ring.len() < 3 && usable {
+                    let kind = ProblemKind::TooFewCorners { found: ring.len() };
+                    self.problems.push(Location::Line(l), kind);
+                    usable = false;
                 }
-                return Ok(ring);
+                return Ok(usable.then_some(ring));
             }
             if !t.eq_ignore_ascii_case(b"vertex") {
                 return Err(self.expected(l, "'vertex' or 'endloop'", t));
             }
-            let p = self.vertex()?;
-            ring.push(self.ix.index(p));
+            match self.vertex()? {
+                Some(p) => ring.push(self.ix.index(p)),
+                None => usable = false,
+            }
         }
     }
 
-    /// Reads the three finite coordinates after `vertex`.
-    fn vertex(&mut self) -> Result<Point3, IoError> {
+    /// Reads the three finite coordinates after `vertex`; `None` (the problems recorded) when
+    /// one is not a finite number.
+    fn vertex(&mut self) -> Result<Option<Point3>, IoError> {
         let mut p = [0.0; 3];
+        let mut ok = true;
         for c in &mut p {
             let (v, vl) = self.next_or("a vertex coordinate")?;
-            *c = text::coordinate(v).map_err(|k| self.err(vl, k))?;
+            match text::coordinate(v) {
+                Ok(x) => *c = x,
+                Err(k) => {
+                    self.problems.push(Location::Line(vl), k);
+                    ok = false;
+                }
+            }
         }
-        Ok(Point3::new(p[0], p[1], p[2]))
+        Ok(ok.then(|| Point3::new(p[0], p[1], p[2])))
     }
 
     /// The mesh (polygons triangulated) and the report, with the warning about non-finite
@@ -511,6 +540,25 @@ mod tests {
             assert_eq!(r.mesh, plain.mesh);
             assert_eq!(r.info.format, "stl-ascii");
         }
+    }
+
+    #[test]
+    fn every_problem_of_an_ascii_stl_is_listed_up_to_a_broken_structure() {
+        let s = "solid t\n facet normal 0 0 x\n  outer loop\n   vertex 0 0 nan\n   vertex 1 0 0\n   vertex 0 1 0\n  endloop\n endfacet\n facet normal 0 0 1\n  outer loop\n   vertex 0 0 0\n   vertex 1 0 0\n  endloop\n endfacet\n facet\n  outer loop\n   vertex 0 0 0\n";
+        let e = read(Path::new("a.stl"), s.as_bytes(), &ReadOptions::default())
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            e.lines().collect::<Vec<_>>(),
+            [
+                "a.stl: 4 problems in this ASCII STL file:",
+                "a.stl:2: 'x' is not a number",
+                "a.stl:4: 'nan' is not a finite number: NaN and infinity are not coordinates",
+                "a.stl:13: a face needs at least 3 corners, found 2",
+                "a.stl:18: unexpected end of file: expected 'vertex' or 'endloop'",
+            ],
+            "{e}"
+        );
     }
 
     #[test]
