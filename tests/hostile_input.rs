@@ -343,6 +343,17 @@ fn hostile_large_piece_far_out_is_refused_by_its_thickness() {
             "place it within 9.007e9 m of the origin",
         ],
     );
+    // The same reach in the outline itself is named as the outline.
+    drape_refused(
+        &[
+            (
+                "outline = [[-0.4, -0.4], [0.4, -0.4], [0.4, 0.4], [-0.4, 0.4]]",
+                "outline = [[-1e12, -1e12], [1e12, -1e12], [1e12, 1e12], [-1e12, 1e12]]",
+            ),
+            ("spacing = 0.02", "spacing = 2e11"),
+        ],
+        &["key 'piece[1].outline': reaches 1.000e12 m from the origin"],
+    );
 }
 
 fn fit_refused(extra: &[&str], parts: &[&str]) {

@@ -140,15 +140,19 @@ fn piece(
     let fabric = fabric_named(&fabric_name, fabrics, &k("fabric"), p);
     let position = pf.position.unwrap_or([0.0; 3]);
     p.finite(&k("position"), &position);
-    let reach = position
-        .iter()
-        .chain(pf.outline.iter().flatten())
-        .map(|v| v.abs())
-        .fold(0.0, f64::max)
-        * to_m;
+    let farthest = |v: &mut dyn Iterator<Item = &f64>| v.map(|v| v.abs()).fold(0.0, f64::max);
+    let by_position = farthest(&mut position.iter());
+    let by_outline = farthest(&mut pf.outline.iter().flatten());
+    let reach = by_position.max(by_outline) * to_m;
     let far = too_far(reach, spacing, fabric.thickness);
     if let Some(m) = &far {
-        p.bad(&k("position"), m.clone());
+        // Named after what reaches that far.
+        let key = if by_outline > by_position {
+            "outline"
+        } else {
+            "position"
+        };
+        p.bad(&k(key), m.clone());
     }
     let rotation = pf.rotation.unwrap_or([0.0; 3]);
     p.finite(&k("rotation"), &rotation);
