@@ -37,7 +37,7 @@ pub enum FitError {
         message: String,
     },
     /// Several values outside what they may be: (key, message) each.
-    #[error("{}: {} problems:{}", path.display(), problems.len(), problems.iter().map(|(k, m)| format!("\n  key '{k}': {m}")).collect::<String>())]
+    #[error("{}: {}", path.display(), crate::scene::key_problems(problems))]
     Keys {
         path: PathBuf,
         problems: Vec<(String, String)>,

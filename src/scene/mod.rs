@@ -89,7 +89,7 @@ pub enum SceneError {
         message: String,
     },
     /// Several values that cannot be: (key, message) each.
-    #[error("{}: {} problems:{}", path.display(), problems.len(), problems.iter().map(|(k, m)| format!("\n  key '{k}': {m}")).collect::<String>())]
+    #[error("{}: {}", path.display(), key_problems(problems))]
     Many {
         path: PathBuf,
         problems: Vec<(String, String)>,
@@ -817,6 +817,15 @@ fn disc_radius(report: Option<&ReportFile>, to_m: f64, p: &Problems) -> Option<f
     report
         .and_then(|r| r.disc_radius)
         .map(|r| p.positive("report.disc_radius", r, 0.09) * to_m)
+}
+
+/// Several problems by key, as every reader of keyed files (scenes, measurement sets) lists
+/// them: "N problems:" then "key 'K': message" on a line each.
+pub fn key_problems(problems: &[(String, String)]) -> String {
+    let lines: String = (problems.iter())
+        .map(|(k, m)| format!("\n  key '{k}': {m}"))
+        .collect();
+    format!("{} problems:{lines}", problems.len())
 }
 
 /// The finest relative step of f64 coordinates a piece needs: the gap between neighbouring
