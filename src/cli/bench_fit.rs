@@ -130,54 +130,16 @@ fn write_plot(path: &std::path::Path, rows: &[Row]) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// The node intervals along of the accuracy table.
+const INTERVALS: [usize; 6] = [8, 16, 32, 64, 128, 256];
+
 /// Runs the benchmark.
 pub fn run(a: FitBench) -> anyhow::Result<()> {
-    let intervals = [8usize, 16, 32, 64, 128, 256];
-    let mut rows = Vec::new();
     if !a.json {
         println!("bench fit: analytic surface, {AROUND} nodes around (exact), largest error over {HEIGHTS} heights");
         println!("  K-1   no correction      m=0          m=1          m=2       fit ms (m=0/1/2)");
     }
-    for &n in &intervals {
-        let k = n + 1;
-        let error = [0, 1, 2].map(|m| lanczos_error(k, m));
-        let g = grid(k);
-        let fit_ms = [0, 1, 2].map(|m| 1e3 * timed(a.runs, || surface::fit(&g, k, AROUND, m)));
-        let row = Row {
-            intervals: n,
-            error_none: plain_error(k),
-            error,
-            fit_ms,
-        };
-        if !a.json {
-            println!(
-                "  {:>4}   {:>10.3e}   {:>10.3e}   {:>10.3e}   {:>10.3e}    {:.2}/{:.2}/{:.2}",
-                n,
-                row.error_none,
-                row.error[0],
-                row.error[1],
-                row.error[2],
-                fit_ms[0],
-                fit_ms[1],
-                fit_ms[2]
-            );
-        }
-        rows.push(row);
-    }
-    // Order from the last three rows where the error is still above round-off.
-    let order_of = |errs: Vec<f64>| -> f64 {
-        let pts: Vec<(f64, f64)> = intervals
-            .iter()
-            .zip(errs)
-            .filter(|(_, e)| *e > 1e-12)
-            .map(|(n, e)| ((*n as f64).ln(), e.ln()))
-            .collect();
-        let tail = &pts[pts.len().saturating_sub(3)..];
-        if tail.len() < 2 {
-            return f64::NAN;
-        }
-        -(tail[tail.len() - 1].1 - tail[0].1) / (tail[tail.len() - 1].0 - tail[0].0)
-    };
+    let rows: Vec<Row> = INTERVALS.iter().map(|&n| accuracy_row(&a, n)).collect();
     let order = [0, 1, 2].map(|m| order_of(rows.iter().map(|r| r.error[m]).collect()));
     let order_none = order_of(rows.iter().map(|r| r.error_none).collect());
     if let Some(path) = &a.plot {
@@ -189,7 +151,70 @@ pub fn run(a: FitBench) -> anyhow::Result<()> {
             order_none, order[0], order[1], order[2]
         );
     }
-    // Speed: 60 sections of 256 points, tessellated 256 x 256.
+    let (core, full) = fit_speed(a.runs);
+    if !a.json {
+        println!("  60 sections x 256 points, fit + tessellate 256 x 256: median {core:.1} ms (goal <= 50 ms); with error estimates and diagnosis: {full:.1} ms");
+    } else {
+        let rep = Report {
+            rows,
+            order_none,
+            order,
+            speed_fit_tessellate_ms: core,
+            speed_with_estimates_ms: full,
+            runs: a.runs,
+        };
+        println!("{}", serde_json::to_string_pretty(&rep)?);
+    }
+    Ok(())
+}
+
+/// The errors and fit times with `n` node intervals along, printed unless `--json`.
+fn accuracy_row(a: &FitBench, n: usize) -> Row {
+    let k = n + 1;
+    let error = [0, 1, 2].map(|m| lanczos_error(k, m));
+    let g = grid(k);
+    let fit_ms = [0, 1, 2].map(|m| 1e3 * timed(a.runs, || surface::fit(&g, k, AROUND, m)));
+    let row = Row {
+        intervals: n,
+        error_none: plain_error(k),
+        error,
+        fit_ms,
+    };
+    if !a.json {
+        println!(
+            "  {:>4}   {:>10.3e}   {:>10.3e}   {:>10.3e}   {:>10.3e}    {:.2}/{:.2}/{:.2}",
+            n,
+            row.error_none,
+            row.error[0],
+            row.error[1],
+            row.error[2],
+            fit_ms[0],
+            fit_ms[1],
+            fit_ms[2]
+        );
+    }
+    row
+}
+
+/// The convergence order of `errs` (one per [`INTERVALS`]), from the last three where the error
+/// is still above round-off.
+fn order_of(errs: Vec<f64>) -> f64 {
+    let pts: Vec<(f64, f64)> = INTERVALS
+        .iter()
+        .zip(errs)
+        .filter(|(_, e)| *e > 1e-12)
+        .map(|(n, e)| ((*n as f64).ln(), e.ln()))
+        .collect();
+    let tail = &pts[pts.len().saturating_sub(3)..];
+    if tail.len() < 2 {
+        return f64::NAN;
+    }
+    -(tail[tail.len() - 1].1 - tail[0].1) / (tail[tail.len() - 1].0 - tail[0].0)
+}
+
+/// Speed: 60 sections of 256 points, tessellated 256 x 256, median ms over `runs`: the core fit
+/// and tessellation, and the whole fit with its error estimates and diagnosis.
+fn fit_speed(runs: u32) -> (f64, f64) {
     let sections: Vec<Section> = (0..60)
         .map(|i| {
             let v = i as f64 / 59.0;
@@ -210,27 +235,11 @@ pub fn run(a: FitBench) -> anyhow::Result<()> {
         ..FitOptions::default()
     };
     let core = 1e3
-        * timed(a.runs, || {
+        * timed(runs, || {
             let (s, _) = crate::fit::section::normalize(sections.clone()).unwrap();
             let g = crate::fit::fitter::node_grid(&s, 256);
             surface::fit(&g, 60, 256, 1).tessellate(256, 256, true)
         });
-    let full = 1e3
-        * timed(a.runs, || {
-            fit_sections(sections.clone(), &[], &opts).unwrap()
-        });
-    if !a.json {
-        println!("  60 sections x 256 points, fit + tessellate 256 x 256: median {core:.1} ms (goal <= 50 ms); with error estimates and diagnosis: {full:.1} ms");
-    } else {
-        let rep = Report {
-            rows,
-            order_none,
-            order,
-            speed_fit_tessellate_ms: core,
-            speed_with_estimates_ms: full,
-            runs: a.runs,
-        };
-        println!("{}", serde_json::to_string_pretty(&rep)?);
-    }
-    Ok(())
+    let full = 1e3 * timed(runs, || fit_sections(sections.clone(), &[], &opts).unwrap());
+    (core, full)
 }
