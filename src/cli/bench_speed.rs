@@ -261,77 +261,8 @@ pub fn run(a: SpeedBench) -> anyhow::Result<()> {
     }
     for &side in &sides {
         for &faces in &faces_list {
-            let mesh = sphere(faces);
-            let mut walls = Vec::new();
-            let mut last = None;
-            let mut settled: f64 = 0.0;
-            for run in 0..a.runs {
-                let mut w = world(side, &mesh, &s, a.friction);
-                let stop = Stop::Steps((a.duration / s.dt).round() as u64);
-                // The last run also records the largest strain of its second half (about 0.5%
-                // of its time), and prints the trace if asked.
-                let half = stop.max_steps() / 2;
-                let mut record = |step: u64, w: &World| {
-                    if a.trace.is_some_and(|k| step.is_multiple_of(k)) {
-                        trace(step, w)?;
-                    }
-                    if step > half {
-                        settled = settled.max(sim::strain(&w.model, &w.state.x).0);
-                    }
-                    Ok(false)
-                };
-                let st = if run + 1 == a.runs {
-                    sim::run(
-                        &mut w,
-                        &s,
-                        stop,
-                        Some(1),
-                        &mut record,
-                        &|_| {},
-                        Default::default(),
-                    )?
-                } else {
-                    sim::run_quiet(&mut w, &s, stop)?
-                };
-                walls.push(st.wall_seconds);
-                last = Some((w, st));
-            }
-            let (w, st) = last.expect("one run at least");
-            let inside = inside_convex(&w);
-            let (max_strain, _) = sim::strain(&w.model, &w.state.x);
-            let clearance = sim::min_clearance(&w)[0];
-            let row = Row {
-                particles: w.model.len(),
-                faces: mesh.faces.len(),
-                settings: s,
-                wall_seconds: median(&walls),
-                solve_seconds: st.solve_seconds,
-                collision_seconds: st.collision_seconds,
-                factor_seconds: st.solver.factor_seconds,
-                factorisations: st.solver.factorisations,
-                low_rank_columns: st.solver.low_rank_columns,
-                iterations_per_step: st.solver.pd_iterations as f64 / st.steps.max(1) as f64,
-                inside,
-                max_strain,
-                settled_strain: settled,
-                min_clearance: clearance,
-            };
-            say(format!(
-                "  {:>9}  {:>6}  {:>8.3}  {:>8.3}  {:>9.3}  {:>8.3} ({:>5}, {:>6}) {:>7.2} | {:>6}  {:>10.2e}  {:>13.2e}  {:>8.3}",
-                row.particles,
-                row.faces,
-                row.wall_seconds,
-                row.solve_seconds,
-                row.collision_seconds,
-                row.factor_seconds,
-                row.factorisations,
-                row.low_rank_columns,
-                row.iterations_per_step,
-                row.inside,
-                row.max_strain,
-                row.settled_strain,
-                row.min_clearance * 1e3
-            ));
+            let row = speed_row(&a, &s, side, &sphere(faces))?;
+            say(row_line(&row));
             rows.push(row);
         }
     }
@@ -339,4 +270,86 @@ pub fn run(a: SpeedBench) -> anyhow::Result<()> {
         println!("{}", serde_json::to_string_pretty(&rows)?);
     }
     Ok(())
+}
+
+/// The scene with a square of `side` particles a side on `mesh`, `a.runs` times: its row (the
+/// median wall time; the rest of the last run, which also records the largest strain of its
+/// second half and prints the trace if asked).
+fn speed_row(
+    a: &SpeedBench,
+    s: &SolverSettings,
+    side: usize,
+    mesh: &TriMesh,
+) -> anyhow::Result<Row> {
+    let mut walls = Vec::new();
+    let mut last = None;
+    let mut settled: f64 = 0.0;
+    for run in 0..a.runs {
+        let mut w = world(side, mesh, s, a.friction);
+        let stop = Stop::Steps((a.duration / s.dt).round() as u64);
+        // The last run also records the largest strain of its second half (about 0.5%
+        // of its time), and prints the trace if asked.
+        let half = stop.max_steps() / 2;
+        let mut record = |step: u64, w: &World| {
+            if a.trace.is_some_and(|k| step.is_multiple_of(k)) {
+                trace(step, w)?;
+            }
+            if step > half {
+                settled = settled.max(sim::strain(&w.model, &w.state.x).0);
+            }
+            Ok(false)
+        };
+        let st = if run + 1 == a.runs {
+            sim::run(
+                &mut w,
+                s,
+                stop,
+                Some(1),
+                &mut record,
+                &|_| {},
+                Default::default(),
+            )?
+        } else {
+            sim::run_quiet(&mut w, s, stop)?
+        };
+        walls.push(st.wall_seconds);
+        last = Some((w, st));
+    }
+    let (w, st) = last.expect("one run at least");
+    Ok(Row {
+        particles: w.model.len(),
+        faces: mesh.faces.len(),
+        settings: *s,
+        wall_seconds: median(&walls),
+        solve_seconds: st.solve_seconds,
+        collision_seconds: st.collision_seconds,
+        factor_seconds: st.solver.factor_seconds,
+        factorisations: st.solver.factorisations,
+        low_rank_columns: st.solver.low_rank_columns,
+        iterations_per_step: st.solver.pd_iterations as f64 / st.steps.max(1) as f64,
+        inside: inside_convex(&w),
+        max_strain: sim::strain(&w.model, &w.state.x).0,
+        settled_strain: settled,
+        min_clearance: sim::min_clearance(&w)[0],
+    })
+}
+
+/// A row of the printed table.
+fn row_line(row: &Row) -> String {
+    format!(
+        "  {:>9}  {:>6}  {:>8.3}  {:>8.3}  {:>9.3}  {:>8.3} ({:>5}, {:>6}) {:>7.2} | {:>6}  {:>10.2e}  {:>13.2e}  {:>8.3}",
+        row.particles,
+        row.faces,
+        row.wall_seconds,
+        row.solve_seconds,
+        row.collision_seconds,
+        row.factor_seconds,
+        row.factorisations,
+        row.low_rank_columns,
+        row.iterations_per_step,
+        row.inside,
+        row.max_strain,
+        row.settled_strain,
+        row.min_clearance * 1e3
+    )
 }
