@@ -84,6 +84,64 @@ pub fn torso_sections(
     body: &TriMesh,
     opts: &ScanOptions,
 ) -> Result<(Vec<Section>, (f64, f64)), FitError> {
+    let (from, to) = band(body, opts)?;
+    let k = opts.levels;
+    let heights: Vec<f64> = (0..k)
+        .map(|i| from + (to - from) * i as f64 / (k - 1) as f64)
+        .collect();
+    let loops: Vec<Vec<Vec<Point2>>> = heights
+        .iter()
+        .map(|&h| {
+            slice(body, h)
+                .into_iter()
+                .filter(|l| l.closed && l.points.len() >= 3)
+                .map(|l| l.xy())
+                .collect()
+        })
+        .collect();
+    let mid = k / 2;
+    let first = loops[mid]
+        .iter()
+        .max_by(|a, b| area(a).total_cmp(&area(b)))
+        .ok_or_else(|| FitError::Scan {
+            level: mid + 1,
+            height: heights[mid],
+            reason: "the slice is empty: the body does not reach this height".into(),
+        })?;
+    let mut torso: Vec<Option<Vec<Point2>>> = vec![None; k];
+    torso[mid] = Some(first.clone());
+    let order: Vec<(usize, usize)> = (mid + 1..k)
+        .map(|i| (i, i - 1))
+        .chain((0..mid).rev().map(|i| (i, i + 1)))
+        .collect();
+    for (i, prev) in order {
+        let prev_torso = torso[prev].as_ref().unwrap();
+        let l =
+            next_torso(&loops[i], &loops[prev], prev_torso).map_err(|reason| FitError::Scan {
+                level: i + 1,
+                height: heights[i],
+                reason,
+            })?;
+        torso[i] = Some(l.clone());
+    }
+    let sections = heights
+        .iter()
+        .zip(torso)
+        .map(|(&h, t)| Section {
+            height: h,
+            points: t.unwrap(),
+        })
+        .collect();
+    Ok((sections, (from, to)))
+}
+
+/// A loop's area.
+fn area(p: &[Point2]) -> f64 {
+    signed_area2(p).abs()
+}
+
+/// The slicing band `(from, to)` of `opts` on `body`, checked with the number of levels.
+fn band(body: &TriMesh, opts: &ScanOptions) -> Result<(f64, f64), FitError> {
     let b = body
         .bbox()
         .ok_or_else(|| FitError::Options("the body mesh is empty".into()))?;
@@ -102,80 +160,40 @@ pub fn torso_sections(
             opts.levels
         )));
     }
-    let k = opts.levels;
-    let heights: Vec<f64> = (0..k)
-        .map(|i| from + (to - from) * i as f64 / (k - 1) as f64)
-        .collect();
-    let loops: Vec<Vec<Vec<Point2>>> = heights
+    Ok((from, to))
+}
+
+/// The torso loop of a level among its `loops`, next to the level of `prev_loops` whose torso
+/// is `prev_torso`: the largest that contains that torso's centroid and swallows none of that
+/// level's other loops (of 1% of its torso's area or more). Else why not.
+fn next_torso<'a>(
+    loops: &'a [Vec<Point2>],
+    prev_loops: &[Vec<Point2>],
+    prev_torso: &[Point2],
+) -> Result<&'a Vec<Point2>, String> {
+    let c = centroid(prev_torso);
+    let pick = loops
         .iter()
-        .map(|&h| {
-            slice(body, h)
-                .into_iter()
-                .filter(|l| l.closed && l.points.len() >= 3)
-                .map(|l| l.xy())
-                .collect()
-        })
-        .collect();
-    let area = |p: &Vec<Point2>| signed_area2(p).abs();
-    let mid = k / 2;
-    let first = loops[mid]
+        .filter(|l| contains(l, &c))
+        .max_by(|a, b| area(a).total_cmp(&area(b)));
+    let Some(l) = pick else {
+        return Err(format!(
+            "no loop contains the torso centre ({:.4}, {:.4}) of the level next to it: the torso splits here (crotch or armpits); choose --from/--to inside the torso",
+            c.x, c.y
+        ));
+    };
+    let limb = prev_loops
         .iter()
-        .max_by(|a, b| area(a).total_cmp(&area(b)))
-        .ok_or_else(|| FitError::Scan {
-            level: mid + 1,
-            height: heights[mid],
-            reason: "the slice is empty: the body does not reach this height".into(),
-        })?;
-    let mut torso: Vec<Option<Vec<Point2>>> = vec![None; k];
-    torso[mid] = Some(first.clone());
-    let order: Vec<(usize, usize)> = (mid + 1..k)
-        .map(|i| (i, i - 1))
-        .chain((0..mid).rev().map(|i| (i, i + 1)))
-        .collect();
-    for (i, prev) in order {
-        let prev_torso = torso[prev].as_ref().unwrap();
-        let c = centroid(prev_torso);
-        let pick = loops[i]
-            .iter()
-            .filter(|l| contains(l, &c))
-            .max_by(|a, b| area(a).total_cmp(&area(b)));
-        match pick {
-            Some(l) => {
-                let limb = loops[prev].iter().filter(|o| *o != prev_torso && area(o) >= 0.01 * area(prev_torso)).find(|o| contains(l, &centroid(o)));
-                if let Some(o) = limb {
-                    let oc = centroid(o);
-                    return Err(FitError::Scan {
-                        level: i + 1,
-                        height: heights[i],
-                        reason: format!(
-                            "the torso joins the loop at ({:.4}, {:.4}) of the level next to it (an arm or a leg): the torso splits here (crotch or armpits); choose --from/--to inside the torso",
-                            oc.x, oc.y
-                        ),
-                    });
-                }
-                torso[i] = Some(l.clone());
-            }
-            None => {
-                return Err(FitError::Scan {
-                    level: i + 1,
-                    height: heights[i],
-                    reason: format!(
-                        "no loop contains the torso centre ({:.4}, {:.4}) of the level next to it: the torso splits here (crotch or armpits); choose --from/--to inside the torso",
-                        c.x, c.y
-                    ),
-                })
-            }
-        }
+        .filter(|o| *o != prev_torso && area(o) >= 0.01 * area(prev_torso))
+        .find(|o| contains(l, &centroid(o)));
+    if let Some(o) = limb {
+        let oc = centroid(o);
+        return Err(format!(
+            "the torso joins the loop at ({:.4}, {:.4}) of the level next to it (an arm or a leg): the torso splits here (crotch or armpits); choose --from/--to inside the torso",
+            oc.x, oc.y
+        ));
     }
-    let sections = heights
-        .iter()
-        .zip(torso)
-        .map(|(&h, t)| Section {
-            height: h,
-            points: t.unwrap(),
-        })
-        .collect();
-    Ok((sections, (from, to)))
+    Ok(l)
 }
 
 #[cfg(test)]
