@@ -305,79 +305,8 @@ pub fn run(a: DrapeBench) -> anyhow::Result<()> {
         dt
     ));
     say("  cells           collision s   total s   | paper collision s   total s   | contacts at the end".into());
-    let mut rows = Vec::new();
-    let mut finals: Vec<Vec<Point3>> = Vec::new();
-    // The paper's grids, then the `auto` rule's.
-    let auto = Collider::auto_dims(&torso);
-    let grids = PAPER
-        .iter()
-        .map(|&(c, pc, pt)| (c, Some((pc, pt))))
-        .chain(std::iter::once((auto, None)));
-    for (cells, paper) in grids {
-        if cells == [1, 1, 1] && a.skip_one_cell {
-            continue;
-        }
-        let mut col = Vec::new();
-        let mut tot = Vec::new();
-        let mut contacts = 0;
-        for _ in 0..a.runs {
-            let (mut w, dt) = bench_world(&torso, cells);
-            let st = sim::run_quiet(
-                &mut w,
-                &SolverSettings::new(Integrator::Leapfrog).with_dt(dt),
-                Stop::Steps(a.steps),
-            )?;
-            col.push(st.collision_seconds);
-            tot.push(st.wall_seconds);
-            contacts = w.state.contact.iter().filter(|c| c.is_some()).count();
-            finals.push(w.state.x.clone());
-        }
-        let row = Row {
-            cells,
-            collision_seconds: median(&col),
-            total_seconds: median(&tot),
-            paper_collision_seconds: paper.map(|p| p.0),
-            paper_total_seconds: paper.map(|p| p.1),
-            contacts_end: contacts,
-        };
-        let name = format!("{}x{}x{}", cells[0], cells[1], cells[2]);
-        say(format!(
-            "  {:<14}  {:>11.4}  {:>8.4}   | {:>17}  {:>8}   | {}",
-            if paper.is_some() {
-                name
-            } else {
-                format!("{name} auto")
-            },
-            row.collision_seconds,
-            row.total_seconds,
-            paper.map_or("-".into(), |(c, _)| format!("{c:.2}")),
-            paper.map_or("-".into(), |(_, t)| format!("{t:.2}")),
-            contacts
-        ));
-        rows.push(row);
-    }
-    ensure!(
-        finals.windows(2).all(|w| w[0] == w[1]),
-        "the grids gave different drapes: collision must not depend on the cells"
-    );
-    // One thread against two, bit for bit.
-    let mut by_threads = Vec::new();
-    for threads in [1, 2] {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()?;
-        let x = pool.install(|| {
-            let (mut w, dt) = bench_world(&torso, [50, 70, 30]);
-            sim::run_quiet(
-                &mut w,
-                &SolverSettings::new(Integrator::Leapfrog).with_dt(dt),
-                Stop::Steps(a.steps),
-            )
-            .map(|_| w.state.x)
-        })?;
-        by_threads.push(x);
-    }
-    let identical = by_threads[0] == by_threads[1];
+    let rows = grid_table(&a, &torso, &say)?;
+    let identical = threads_identical(&a, &torso)?;
     say(format!("  final positions with 1 and 2 threads identical: {identical}; the same for every grid: true"));
     let torso_row = torso_per_second(&a, &torso)?;
     say(format!(
@@ -409,6 +338,99 @@ pub fn run(a: DrapeBench) -> anyhow::Result<()> {
         println!("{}", serde_json::to_string_pretty(&rep)?);
     }
     Ok(())
+}
+
+/// The grid table: the paper's grids, then the `auto` rule's, each timed and printed; an error
+/// when any two give different drapes.
+fn grid_table(a: &DrapeBench, torso: &TriMesh, say: &dyn Fn(String)) -> anyhow::Result<Vec<Row>> {
+    let mut rows = Vec::new();
+    let mut finals: Vec<Vec<Point3>> = Vec::new();
+    let auto = Collider::auto_dims(torso);
+    let grids = PAPER
+        .iter()
+        .map(|&(c, pc, pt)| (c, Some((pc, pt))))
+        .chain(std::iter::once((auto, None)));
+    for (cells, paper) in grids {
+        if cells == [1, 1, 1] && a.skip_one_cell {
+            continue;
+        }
+        let row = grid_row(a, torso, cells, paper, &mut finals)?;
+        let name = format!("{}x{}x{}", cells[0], cells[1], cells[2]);
+        say(format!(
+            "  {:<14}  {:>11.4}  {:>8.4}   | {:>17}  {:>8}   | {}",
+            if paper.is_some() {
+                name
+            } else {
+                format!("{name} auto")
+            },
+            row.collision_seconds,
+            row.total_seconds,
+            paper.map_or("-".into(), |(c, _)| format!("{c:.2}")),
+            paper.map_or("-".into(), |(_, t)| format!("{t:.2}")),
+            row.contacts_end
+        ));
+        rows.push(row);
+    }
+    ensure!(
+        finals.windows(2).all(|w| w[0] == w[1]),
+        "the grids gave different drapes: collision must not depend on the cells"
+    );
+    Ok(rows)
+}
+
+/// The bench scene with `cells`, `a.runs` times: its row (beside the paper's figures), each
+/// run's final positions pushed onto `finals`.
+fn grid_row(
+    a: &DrapeBench,
+    torso: &TriMesh,
+    cells: [usize; 3],
+    paper: Option<(f64, f64)>,
+    finals: &mut Vec<Vec<Point3>>,
+) -> anyhow::Result<Row> {
+    let mut col = Vec::new();
+    let mut tot = Vec::new();
+    let mut contacts = 0;
+    for _ in 0..a.runs {
+        let (mut w, dt) = bench_world(torso, cells);
+        let st = sim::run_quiet(
+            &mut w,
+            &SolverSettings::new(Integrator::Leapfrog).with_dt(dt),
+            Stop::Steps(a.steps),
+        )?;
+        col.push(st.collision_seconds);
+        tot.push(st.wall_seconds);
+        contacts = w.state.contact.iter().filter(|c| c.is_some()).count();
+        finals.push(w.state.x.clone());
+    }
+    Ok(Row {
+        cells,
+        collision_seconds: median(&col),
+        total_seconds: median(&tot),
+        paper_collision_seconds: paper.map(|p| p.0),
+        paper_total_seconds: paper.map(|p| p.1),
+        contacts_end: contacts,
+    })
+}
+
+/// Whether the bench scene ends bit for bit the same with one thread and with two.
+fn threads_identical(a: &DrapeBench, torso: &TriMesh) -> anyhow::Result<bool> {
+    let mut by_threads = Vec::new();
+    for threads in [1, 2] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()?;
+        let x = pool.install(|| {
+            let (mut w, dt) = bench_world(torso, [50, 70, 30]);
+            sim::run_quiet(
+                &mut w,
+                &SolverSettings::new(Integrator::Leapfrog).with_dt(dt),
+                Stop::Steps(a.steps),
+            )
+            .map(|_| w.state.x)
+        })?;
+        by_threads.push(x);
+    }
+    Ok(by_threads[0] == by_threads[1])
 }
 
 /// The configurations of the speed-against-accuracy table: (label, settings).
