@@ -315,6 +315,93 @@ fn round32(v: f64, up: bool) -> f32 {
 /// Plane distances within this fraction of the cloth's coordinates may be rounding.
 const PLANE_TOL_REL: f64 = 1e-12;
 
+/// Each particle's representative: the smallest particle it is sewn to through `seams`, or
+/// itself.
+fn weld_seams(particles: usize, seams: &[[u32; 2]]) -> Vec<u32> {
+    let mut parent: Vec<usize> = (0..particles).collect();
+    for &[a, b] in seams {
+        let (ra, rb) = (
+            uf_root(&mut parent, a as usize),
+            uf_root(&mut parent, b as usize),
+        );
+        if ra != rb {
+            parent[ra.max(rb)] = ra.min(rb);
+        }
+    }
+    (0..particles)
+        .map(|i| uf_root(&mut parent, i) as u32)
+        .collect()
+}
+
+/// The unique undirected edges of `triangles` keyed by their welded ends (sorted by key), with
+/// the smallest particle pair for each key; edges whose ends are welded together are left out.
+fn welded_edges(triangles: &[[u32; 3]], weld: &[u32]) -> Vec<([u32; 2], [u32; 2])> {
+    let mut all: Vec<([u32; 2], [u32; 2])> = Vec::with_capacity(triangles.len() * 3);
+    for t in triangles {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            let (ra, rb) = (weld[a as usize], weld[b as usize]);
+            if ra == rb {
+                continue;
+            }
+            all.push(if ra < rb {
+                ([ra, rb], [a, b])
+            } else {
+                ([rb, ra], [b, a])
+            });
+        }
+    }
+    all.sort_unstable();
+    all.dedup_by_key(|e| e.0);
+    all
+}
+
+/// Compressed rows of `(row, value)` pairs over `rows` rows: `start[r]..start[r + 1]` in
+/// `values` are row `r`'s values, in the order `pairs` gives them (it is called twice: count,
+/// then fill).
+fn csr<I: Iterator<Item = (u32, u32)>>(rows: usize, pairs: impl Fn() -> I) -> (Vec<u32>, Vec<u32>) {
+    let mut start = vec![0u32; rows + 1];
+    for (r, _) in pairs() {
+        start[r as usize + 1] += 1;
+    }
+    for i in 0..rows {
+        start[i + 1] += start[i];
+    }
+    let mut cursor = start.clone();
+    let mut values = vec![0u32; start[rows] as usize];
+    for (r, v) in pairs() {
+        values[cursor[r as usize] as usize] = v;
+        cursor[r as usize] += 1;
+    }
+    (start, values)
+}
+
+/// Each representative's star (the triangles at it or at a neighbour in `ring`, sorted, from
+/// the triangles at each representative `vt`), as compressed rows: `(star_start, star)`.
+fn stars(weld: &[u32], ring: (&[u32], &[u32]), vt: (&[u32], &[u32])) -> (Vec<u32>, Vec<u32>) {
+    let ((count, ring), (vt_start, vt)) = (ring, vt);
+    let particles = weld.len();
+    let mut star_start = vec![0u32; particles + 1];
+    let mut star = Vec::new();
+    let mut one = Vec::new();
+    for r in 0..particles {
+        if weld[r] == r as u32 {
+            one.clear();
+            let ring_r = &ring[count[r] as usize..count[r + 1] as usize];
+            for &v in std::iter::once(&(r as u32)).chain(ring_r) {
+                one.extend_from_slice(
+                    &vt[vt_start[v as usize] as usize..vt_start[v as usize + 1] as usize],
+                );
+            }
+            one.sort_unstable();
+            one.dedup();
+            star.extend_from_slice(&one);
+        }
+        star_start[r + 1] = star.len() as u32;
+    }
+    (star_start, star)
+}
+
 /// A spatial hash of the cloth's triangles, with the cloth's fixed topology (welded seams, unique
 /// edges, 1-rings) and the buffers of [`resolve_self`]. Build it once per cloth with
 /// [`ClothHash::new`]; [`ClothHash::rebuild`] (or `resolve_self`) lists the triangles at new
@@ -368,96 +455,24 @@ impl ClothHash {
     /// The topology of a cloth of `particles` particles and `triangles`, the two sides of each
     /// seam in `seams` welded. No cubes yet: see [`ClothHash::rebuild`].
     pub fn new(particles: usize, triangles: &[[u32; 3]], seams: &[[u32; 2]]) -> ClothHash {
-        let mut parent: Vec<usize> = (0..particles).collect();
-        for &[a, b] in seams {
-            let (ra, rb) = (
-                uf_root(&mut parent, a as usize),
-                uf_root(&mut parent, b as usize),
-            );
-            if ra != rb {
-                parent[ra.max(rb)] = ra.min(rb);
-            }
-        }
-        let weld: Vec<u32> = (0..particles)
-            .map(|i| uf_root(&mut parent, i) as u32)
-            .collect();
+        let weld = weld_seams(particles, seams);
         let tri_weld: Vec<[u32; 3]> = triangles
             .iter()
             .map(|t| t.map(|v| weld[v as usize]))
             .collect();
-        // Edges keyed by their welded ends; the particle pair kept is the smallest for the key.
-        let mut all: Vec<([u32; 2], [u32; 2])> = Vec::with_capacity(triangles.len() * 3);
-        for t in triangles {
-            for k in 0..3 {
-                let (a, b) = (t[k], t[(k + 1) % 3]);
-                let (ra, rb) = (weld[a as usize], weld[b as usize]);
-                if ra == rb {
-                    continue;
-                }
-                all.push(if ra < rb {
-                    ([ra, rb], [a, b])
-                } else {
-                    ([rb, ra], [b, a])
-                });
-            }
-        }
-        all.sort_unstable();
-        all.dedup_by_key(|e| e.0);
-        let mut count = vec![0u32; particles + 1];
-        for (k, _) in &all {
-            count[k[0] as usize + 1] += 1;
-            count[k[1] as usize + 1] += 1;
-        }
-        for i in 0..particles {
-            count[i + 1] += count[i];
-        }
-        let mut fill = count.clone();
-        let mut ring = vec![0u32; count[particles] as usize];
-        for (k, _) in &all {
-            for (u, w) in [(k[0], k[1]), (k[1], k[0])] {
-                ring[fill[u as usize] as usize] = w;
-                fill[u as usize] += 1;
-            }
-        }
+        let all = welded_edges(triangles, &weld);
+        // Each particle's 1-ring of representatives, sorted.
+        let (count, mut ring) = csr(particles, || {
+            all.iter().flat_map(|(k, _)| [(k[0], k[1]), (k[1], k[0])])
+        });
         for r in 0..particles {
             ring[count[r] as usize..count[r + 1] as usize].sort_unstable();
         }
-        // Each representative's star: the triangles at it or at a neighbour, sorted.
-        let mut vt_start = vec![0u32; particles + 1];
-        for tw in &tri_weld {
-            for &v in tw {
-                vt_start[v as usize + 1] += 1;
-            }
-        }
-        for i in 0..particles {
-            vt_start[i + 1] += vt_start[i];
-        }
-        let mut cursor = vt_start.clone();
-        let mut vt = vec![0u32; vt_start[particles] as usize];
-        for (t, tw) in tri_weld.iter().enumerate() {
-            for &v in tw {
-                vt[cursor[v as usize] as usize] = t as u32;
-                cursor[v as usize] += 1;
-            }
-        }
-        let mut star_start = vec![0u32; particles + 1];
-        let mut star = Vec::new();
-        let mut one = Vec::new();
-        for r in 0..particles {
-            if weld[r] == r as u32 {
-                one.clear();
-                let ring_r = &ring[count[r] as usize..count[r + 1] as usize];
-                for &v in std::iter::once(&(r as u32)).chain(ring_r) {
-                    one.extend_from_slice(
-                        &vt[vt_start[v as usize] as usize..vt_start[v as usize + 1] as usize],
-                    );
-                }
-                one.sort_unstable();
-                one.dedup();
-                star.extend_from_slice(&one);
-            }
-            star_start[r + 1] = star.len() as u32;
-        }
+        // The triangles at each representative.
+        let (vt_start, vt) = csr(particles, || {
+            (tri_weld.iter().enumerate()).flat_map(|(t, tw)| tw.map(|v| (v, t as u32)))
+        });
+        let (star_start, star) = stars(&weld, (&count, &ring), (&vt_start, &vt));
         ClothHash {
             particles,
             weld,
