@@ -248,6 +248,45 @@ type Walk = Vec<(usize, bool)>;
 
 /// The garment edges of `pattern` and its rings.
 fn rings(pattern: &Pattern) -> (Vec<GEdge>, Vec<(RingKind, Walk)>) {
+    let (mut corners, stitched) = sew_corners(pattern);
+    let mut edges = Vec::new();
+    let seam = stitch_edges(pattern, &mut corners, &mut edges);
+    let open = open_edges(pattern, &mut corners, &stitched, &mut edges);
+    let mut out: Vec<(RingKind, Walk)> = (seam_rings(&edges, seam).into_iter())
+        .map(|ring| (RingKind::Seam, ring))
+        .collect();
+    for ring in chain(&edges, &open) {
+        out.push((RingKind::Opening, ring));
+    }
+    (edges, out)
+}
+
+/// The panels' corners, numbered panel after panel, and which of them sewing joins.
+struct Corners {
+    /// Each panel's first corner.
+    first: Vec<usize>,
+    /// Union-find over the corners.
+    parent: Vec<usize>,
+}
+
+impl Corners {
+    /// The corners at the start and the end of a panel edge.
+    fn ends(&self, pattern: &Pattern, e: &EdgeRef) -> (usize, usize) {
+        let edge = &pattern.panels[e.panel].edges[e.edge];
+        (
+            self.first[e.panel] + edge.start,
+            self.first[e.panel] + edge.end,
+        )
+    }
+
+    /// The sewn corner a corner is part of.
+    fn root(&mut self, x: usize) -> usize {
+        uf_root(&mut self.parent, x)
+    }
+}
+
+/// The corners of `pattern` joined by its stitches, and per panel edge whether it is stitched.
+fn sew_corners(pattern: &Pattern) -> (Corners, Vec<Vec<bool>>) {
     let first: Vec<usize> = pattern
         .panels
         .iter()
@@ -260,34 +299,38 @@ fn rings(pattern: &Pattern) -> (Vec<GEdge>, Vec<(RingKind, Walk)>) {
     let total = first
         .last()
         .map_or(0, |f| f + pattern.panels.last().unwrap().vertices.len());
-    let mut parent: Vec<usize> = (0..total).collect();
-    let ends = |e: &EdgeRef| {
-        let edge = &pattern.panels[e.panel].edges[e.edge];
-        (first[e.panel] + edge.start, first[e.panel] + edge.end)
+    let mut c = Corners {
+        first,
+        parent: (0..total).collect(),
     };
     let mut stitched = vec![Vec::new(); pattern.panels.len()];
     for (k, p) in pattern.panels.iter().enumerate() {
         stitched[k] = vec![false; p.edges.len()];
     }
     for st in &pattern.stitches {
-        let (a0, a1) = ends(&st.a);
-        let (b0, b1) = ends(&st.b);
+        let (a0, a1) = c.ends(pattern, &st.a);
+        let (b0, b1) = c.ends(pattern, &st.b);
         let pairs = if st.right_wrong {
             [(a0, b0), (a1, b1)]
         } else {
             [(a0, b1), (a1, b0)]
         };
         for (x, y) in pairs {
-            let (x, y) = (uf_root(&mut parent, x), uf_root(&mut parent, y));
-            parent[x] = y;
+            let (x, y) = (c.root(x), c.root(y));
+            c.parent[x] = y;
         }
         stitched[st.a.panel][st.a.edge] = true;
         stitched[st.b.panel][st.b.edge] = true;
     }
-    let mut edges = Vec::new();
+    (c, stitched)
+}
+
+/// A garment edge per stitch, pushed onto `edges`; those that may be part of a seam ring
+/// (between different panels, more horizontal than vertical on both sides).
+fn stitch_edges(pattern: &Pattern, c: &mut Corners, edges: &mut Vec<GEdge>) -> Vec<usize> {
     let mut seam = Vec::new();
     for st in &pattern.stitches {
-        let (a0, a1) = ends(&st.a);
+        let (a0, a1) = c.ends(pattern, &st.a);
         let horizontal = [&st.a, &st.b].iter().all(|e| {
             let pts = placed(pattern, e);
             let d = pts[pts.len() - 1] - pts[0];
@@ -297,31 +340,44 @@ fn rings(pattern: &Pattern) -> (Vec<GEdge>, Vec<(RingKind, Walk)>) {
             seam.push(edges.len());
         }
         edges.push(GEdge {
-            from: uf_root(&mut parent, a0),
-            to: uf_root(&mut parent, a1),
+            from: c.root(a0),
+            to: c.root(a1),
             sides: vec![st.a, st.b],
             right_wrong: st.right_wrong,
         });
     }
+    seam
+}
+
+/// A garment edge per panel edge not `stitched`, pushed onto `edges`; their indices.
+fn open_edges(
+    pattern: &Pattern,
+    c: &mut Corners,
+    stitched: &[Vec<bool>],
+    edges: &mut Vec<GEdge>,
+) -> Vec<usize> {
     let mut open = Vec::new();
     for (k, sewn) in stitched.iter().enumerate() {
         for (j, done) in sewn.iter().enumerate() {
             if !done {
                 let e = EdgeRef { panel: k, edge: j };
-                let (s, t) = ends(&e);
+                let (s, t) = c.ends(pattern, &e);
                 open.push(edges.len());
                 edges.push(GEdge {
-                    from: uf_root(&mut parent, s),
-                    to: uf_root(&mut parent, t),
+                    from: c.root(s),
+                    to: c.root(t),
                     sides: vec![e],
                     right_wrong: false,
                 });
             }
         }
     }
-    let mut out = Vec::new();
-    // Seam rings: prune dangling chains, keep components whose every corner has degree 2.
-    let mut alive = seam.clone();
+    open
+}
+
+/// Seam rings: dangling chains of `seam` pruned, the components whose every corner has degree
+/// 2 kept.
+fn seam_rings(edges: &[GEdge], mut alive: Vec<usize>) -> Vec<Walk> {
     loop {
         let mut degree: HashMap<usize, usize> = HashMap::new();
         for &e in &alive {
@@ -332,18 +388,11 @@ fn rings(pattern: &Pattern) -> (Vec<GEdge>, Vec<(RingKind, Walk)>) {
         alive.retain(|&e| degree[&edges[e].from] > 1 && degree[&edges[e].to] > 1);
         if alive.len() == before {
             let two = |e: &usize| degree[&edges[*e].from] == 2 && degree[&edges[*e].to] == 2;
-            for ring in chain(&edges, &alive) {
-                if ring.iter().all(|(e, _)| two(e)) {
-                    out.push((RingKind::Seam, ring));
-                }
-            }
-            break;
+            return (chain(edges, &alive).into_iter())
+                .filter(|ring| ring.iter().all(|(e, _)| two(e)))
+                .collect();
         }
     }
-    for ring in chain(&edges, &open) {
-        out.push((RingKind::Opening, ring));
-    }
-    (edges, out)
 }
 
 /// Closed chains of `subset` (edges met at shared corners), each edge once.
