@@ -92,6 +92,29 @@ fn bend_elements(
     if fabric.bend[0] <= 0.0 && fabric.bend[1] <= 0.0 {
         return bends;
     }
+    let paired = grid_bends(flat, grid_particles, fabric, h, grid, &mut bends);
+    let (mut ring, dual) = cotangent_rings(flat, triangles, grid_particles, &paired);
+    let b = 0.5 * (fabric.bend[0] + fabric.bend[1]);
+    let mut nodes: Vec<u32> = ring.keys().copied().collect();
+    nodes.sort_unstable();
+    for v in nodes {
+        let r = ring.remove(&v).unwrap_or_default();
+        bends.extend(laplacian_bend(v, r, dual[v as usize], b));
+    }
+    bends
+}
+
+/// The two over-one-node stencils (where their stiffness is positive) at every grid node of the
+/// first `grid_particles` whose four thread neighbours exist, pushed onto `bends`; per particle,
+/// whether it has them.
+fn grid_bends(
+    flat: &[Point2],
+    grid_particles: usize,
+    fabric: &Fabric,
+    h: f64,
+    grid: impl Fn(i64, i64) -> u32,
+    bends: &mut Vec<Bend>,
+) -> Vec<bool> {
     let mut paired = vec![false; flat.len()];
     for (v, q) in flat.iter().enumerate().take(grid_particles) {
         let (i, j) = ((q.x / h).round() as i64, (q.y / h).round() as i64);
@@ -115,8 +138,22 @@ fn bend_elements(
             }
         }
     }
-    // Cotangent weights and a third of the incident triangles' area for every other node.
-    let mut ring: HashMap<u32, Vec<(u32, f64)>> = HashMap::new();
+    paired
+}
+
+/// Per node, its neighbours with a cotangent weight each (a neighbour may come more than once).
+type CotRings = HashMap<u32, Vec<(u32, f64)>>;
+
+/// The cotangent ring of every grid particle not `paired` (its neighbours with half the
+/// cotangent weight of each triangle's edge to them, unmerged), and every particle's third of
+/// its incident triangles' area.
+fn cotangent_rings(
+    flat: &[Point2],
+    triangles: &[[u32; 3]],
+    grid_particles: usize,
+    paired: &[bool],
+) -> (CotRings, Vec<f64>) {
+    let mut ring = CotRings::new();
     let mut dual = vec![0.0; flat.len()];
     for t in triangles {
         let area = 0.5
@@ -140,38 +177,38 @@ fn bend_elements(
             }
         }
     }
-    let b = 0.5 * (fabric.bend[0] + fabric.bend[1]);
-    let mut nodes: Vec<u32> = ring.keys().copied().collect();
-    nodes.sort_unstable();
-    for v in nodes {
-        let mut r = ring.remove(&v).unwrap_or_default();
-        r.sort_by_key(|e| e.0);
-        let mut merged: Vec<(u32, f64)> = Vec::new();
-        for (q, w) in r {
-            match merged.last_mut() {
-                Some(last) if last.0 == q => last.1 += w,
-                _ => merged.push((q, w)),
-            }
+    (ring, dual)
+}
+
+/// The cotangent Laplacian element of node `v` from its unmerged ring `r` (the weights of a
+/// neighbour met twice summed), its dual area `dual` and the mean bending stiffness `b`; none
+/// for a sliver (a weight not finite or above [`MAX_COT`]) or no area.
+fn laplacian_bend(v: u32, mut r: Vec<(u32, f64)>, dual: f64, b: f64) -> Option<Bend> {
+    r.sort_by_key(|e| e.0);
+    let mut merged: Vec<(u32, f64)> = Vec::new();
+    for (q, w) in r {
+        match merged.last_mut() {
+            Some(last) if last.0 == q => last.1 += w,
+            _ => merged.push((q, w)),
         }
-        if merged
-            .iter()
-            .any(|e| !e.1.is_finite() || e.1.abs() > MAX_COT)
-            || dual[v as usize] <= 0.0
-        {
-            continue;
-        }
-        let mut el = Bend {
-            nodes: vec![v],
-            weights: vec![-merged.iter().map(|e| e.1).sum::<f64>()],
-            c: b / dual[v as usize],
-        };
-        for (q, w) in merged {
-            el.nodes.push(q);
-            el.weights.push(w);
-        }
-        bends.push(el);
     }
-    bends
+    if merged
+        .iter()
+        .any(|e| !e.1.is_finite() || e.1.abs() > MAX_COT)
+        || dual <= 0.0
+    {
+        return None;
+    }
+    let mut el = Bend {
+        nodes: vec![v],
+        weights: vec![-merged.iter().map(|e| e.1).sum::<f64>()],
+        c: b / dual,
+    };
+    for (q, w) in merged {
+        el.nodes.push(q);
+        el.weights.push(w);
+    }
+    Some(el)
 }
 
 /// A pattern piece, flat.
