@@ -610,16 +610,7 @@ pub fn sew(
     while (report.seam_gap_max > settings.seam_closed || !held(world))
         && report.time < settings.sew_max
     {
-        world.model.external.clear();
-        lift(world, seams, dt);
-        if let Some(h) = hold {
-            pull_waist(world, h, dt);
-        }
-        let quiet = &mut |_: u64, _: &World| Ok(false);
-        let stats = run_stage(world, &stage, Stop::Steps(chunk), None, quiet, cancel)?;
-        // Sewing is quasi-static: what the seams' pull gave the panels is taken away, so they
-        // do not fly on past where they meet.
-        world.state.v.iter_mut().for_each(|v| *v = Vec3::zeros());
+        let stats = sew_chunk(world, seams, hold, &stage, Stop::Steps(chunk), cancel)?;
         report.time += stats.time;
         report.steps += stats.steps;
         report.wall_seconds += stats.wall_seconds;
@@ -627,39 +618,23 @@ pub fn sew(
         report.seam_gap_max = gaps.0;
         progress(report.time);
         history.push(gaps);
-        // Slow: the widest or the mean gap shrank by less than SLOW over the last STALL
-        // checks. The seams pull harder (the gaps are smaller now: the rows along them no
-        // longer run ahead of the cloth), up to SEW_WEIGHT_MAX; slow at the most, sewing has
-        // stalled.
-        // Also slow: at the widest gap's rate over those checks it would not close before
-        // `sew_max` (a gap shrinking steadily but too slowly, by 11% per ten checks, say).
-        let k = history.len();
-        let slow = |now: f64, then: f64| now > (1.0 - SLOW) * then;
-        let late = |now: f64, then: f64| {
-            let left = settings.sew_max - report.time;
-            let checks = STALL as f64 * (settings.seam_closed / now).ln() / (now / then).ln();
-            now > settings.seam_closed && checks * settings.check_every > left
-        };
-        if k > STALL
-            && (slow(history[k - 1].0, history[k - 1 - STALL].0)
-                || slow(history[k - 1].1, history[k - 1 - STALL].1)
-                || late(history[k - 1].0, history[k - 1 - STALL].0))
-        {
-            history.drain(..k - 1);
-            if stage.solver.bending_hessian == BendingHessian::Lumped {
-                // The lumped matrix damps the bending modes that the last centimetres of a
-                // close need (on the jumpsuit, sewing with it alone stalled 61 to 98 mm open
-                // in two starts of three): go on with the exact one before pulling harder.
-                stage.solver.bending_hessian = BendingHessian::Exact;
-                report.exact_from = Some(report.time);
-                continue;
-            }
-            if weight >= SEW_WEIGHT_MAX {
-                break;
-            }
-            weight = (2.0 * weight).min(SEW_WEIGHT_MAX);
-            set_seam_k(&mut world.model, weight * mean_mass / (dt * dt));
+        if !sewing_slowed(&history, settings, report.time) {
+            continue;
         }
+        history.drain(..history.len() - 1);
+        if stage.solver.bending_hessian == BendingHessian::Lumped {
+            // The lumped matrix damps the bending modes that the last centimetres of a
+            // close need (on the jumpsuit, sewing with it alone stalled 61 to 98 mm open
+            // in two starts of three): go on with the exact one before pulling harder.
+            stage.solver.bending_hessian = BendingHessian::Exact;
+            report.exact_from = Some(report.time);
+            continue;
+        }
+        if weight >= SEW_WEIGHT_MAX {
+            break;
+        }
+        weight = (2.0 * weight).min(SEW_WEIGHT_MAX);
+        set_seam_k(&mut world.model, weight * mean_mass / (dt * dt));
     }
     report.sew_weight = weight;
     world.model.external.clear();
@@ -668,6 +643,52 @@ pub fn sew(
     }
     report.done = report.seam_gap_max <= settings.seam_closed && held(world);
     Ok(report)
+}
+
+/// One check's worth of sewing (`stop`): the seams' sides lifted towards each other, the held
+/// particles pulled to their level, the steps run, and the velocities zeroed after them.
+fn sew_chunk(
+    world: &mut World,
+    seams: &[SeamPair],
+    hold: Option<&Hold>,
+    stage: &GarmentSettings,
+    stop: Stop,
+    cancel: Option<&AtomicBool>,
+) -> Result<sim::RunStats, SimError> {
+    let dt = stage.solver.dt;
+    world.model.external.clear();
+    lift(world, seams, dt);
+    if let Some(h) = hold {
+        pull_waist(world, h, dt);
+    }
+    let quiet = &mut |_: u64, _: &World| Ok(false);
+    let stats = run_stage(world, stage, stop, None, quiet, cancel)?;
+    // Sewing is quasi-static: what the seams' pull gave the panels is taken away, so they
+    // do not fly on past where they meet.
+    world.state.v.iter_mut().for_each(|v| *v = Vec3::zeros());
+    Ok(stats)
+}
+
+/// Whether sewing has slowed, from the seam gaps `(widest, mean)` at each check since the
+/// last change (`history`) and the simulated `time` so far.
+///
+/// Slow: the widest or the mean gap shrank by less than SLOW over the last STALL checks. The
+/// seams pull harder (the gaps are smaller now: the rows along them no longer run ahead of the
+/// cloth), up to SEW_WEIGHT_MAX; slow at the most, sewing has stalled.
+/// Also slow: at the widest gap's rate over those checks it would not close before `sew_max`
+/// (a gap shrinking steadily but too slowly, by 11% per ten checks, say).
+fn sewing_slowed(history: &[(f64, f64)], settings: &GarmentSettings, time: f64) -> bool {
+    let k = history.len();
+    let slow = |now: f64, then: f64| now > (1.0 - SLOW) * then;
+    let late = |now: f64, then: f64| {
+        let left = settings.sew_max - time;
+        let checks = STALL as f64 * (settings.seam_closed / now).ln() / (now / then).ln();
+        now > settings.seam_closed && checks * settings.check_every > left
+    };
+    k > STALL
+        && (slow(history[k - 1].0, history[k - 1 - STALL].0)
+            || slow(history[k - 1].1, history[k - 1 - STALL].1)
+            || late(history[k - 1].0, history[k - 1 - STALL].0))
 }
 
 /// The held particles' mean vertical distance from their level.
