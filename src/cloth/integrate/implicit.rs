@@ -210,8 +210,10 @@ impl ImplicitEuler {
     }
 }
 
-impl Solver for ImplicitEuler {
-    fn step(&mut self, input: &StepIn, out: &mut StepOut) -> Result<(), NotPositiveDefinite> {
+impl ImplicitEuler {
+    /// The iterate `xk = x + dx` and the right-hand side of Newton step `it` (its `delta`
+    /// zeroed after the first: the first starts from the warm start).
+    fn newton_rhs(&mut self, input: &StepIn, it: u32) {
         let StepIn {
             model,
             x,
@@ -220,6 +222,81 @@ impl Solver for ImplicitEuler {
             dt,
             ..
         } = *input;
+        let h2 = dt * dt;
+        self.xk.clear();
+        self.xk.extend(x.iter().zip(&self.dx).map(|(p, d)| p + d));
+        if it > 0 {
+            self.delta.iter_mut().for_each(|d| *d = Vec3::zeros());
+        }
+        let (xk, dx, fric) = (&self.xk, &self.dx, &self.fric);
+        par::for_chunks(256, &mut self.rhs, |base, rs| {
+            for (k, r) in rs.iter_mut().enumerate() {
+                let i = base + k;
+                let m = model.mass[i];
+                let f = forces::add_internal(
+                    model,
+                    xk,
+                    i,
+                    f_ext[i] + fric[i] - dx[i] * (model.damping[i] * m / dt),
+                );
+                *r = f * h2 - (dx[i] - v[i] * dt) * m;
+            }
+        });
+    }
+
+    /// Solves the linearised system of the Newton step for `delta` (filtered), by the direct
+    /// solver or by conjugate gradients; `A delta`.
+    fn newton_delta(
+        &mut self,
+        model: &ClothModel,
+        h2: f64,
+        dt: f64,
+    ) -> Result<Vec<Vec3>, NotPositiveDefinite> {
+        self.linearise(model, h2, dt);
+        let (hess, bend_y) = (
+            &self.hess,
+            std::sync::Mutex::new(std::mem::take(&mut self.bend_y)),
+        );
+        let mul = |y: &[Vec3], o: &mut [Vec3]| {
+            let mut b = bend_y.lock().unwrap();
+            multiply(model, hess, &mut b, h2, dt, y, o)
+        };
+        let res = match &mut self.direct {
+            Some(sys) => {
+                let t = std::time::Instant::now();
+                sys.solve(model, &self.diag, hess, h2, &self.rhs, &mut self.delta)?;
+                for (d, f) in self.delta.iter_mut().zip(&self.filter) {
+                    *d = f.apply(*d);
+                }
+                self.stats.factor_seconds += t.elapsed().as_secs_f64();
+                self.stats.factorisations += 1;
+                cg::CgResult {
+                    iterations: 0,
+                    converged: true,
+                }
+            }
+            None => cg::solve(
+                &mul,
+                &self.rhs,
+                &self.precond,
+                &self.filter,
+                &mut self.delta,
+                self.settings.cg_tolerance,
+                self.settings.cg_max_iterations,
+                &mut self.scratch,
+            ),
+        };
+        self.stats.cg_iterations += res.iterations as u64;
+        let mut ad = vec![Vec3::zeros(); model.len()];
+        mul(&self.delta, &mut ad);
+        self.bend_y = bend_y.into_inner().unwrap();
+        Ok(ad)
+    }
+}
+
+impl Solver for ImplicitEuler {
+    fn step(&mut self, input: &StepIn, out: &mut StepOut) -> Result<(), NotPositiveDefinite> {
+        let StepIn { model, v, dt, .. } = *input;
         let n = model.len();
         let h2 = dt * dt;
         for i in 0..n {
@@ -229,64 +306,9 @@ impl Solver for ImplicitEuler {
             self.delta[i] = v[i] * dt;
         }
         for it in 0..self.settings.newton_iterations.max(1) {
-            self.xk.clear();
-            self.xk.extend(x.iter().zip(&self.dx).map(|(p, d)| p + d));
-            if it > 0 {
-                self.delta.iter_mut().for_each(|d| *d = Vec3::zeros());
-            }
-            let (xk, dx, fric) = (&self.xk, &self.dx, &self.fric);
-            par::for_chunks(256, &mut self.rhs, |base, rs| {
-                for (k, r) in rs.iter_mut().enumerate() {
-                    let i = base + k;
-                    let m = model.mass[i];
-                    let f = forces::add_internal(
-                        model,
-                        xk,
-                        i,
-                        f_ext[i] + fric[i] - dx[i] * (model.damping[i] * m / dt),
-                    );
-                    *r = f * h2 - (dx[i] - v[i] * dt) * m;
-                }
-            });
-            self.linearise(model, h2, dt);
-            let (hess, bend_y) = (
-                &self.hess,
-                std::sync::Mutex::new(std::mem::take(&mut self.bend_y)),
-            );
-            let mul = |y: &[Vec3], o: &mut [Vec3]| {
-                let mut b = bend_y.lock().unwrap();
-                multiply(model, hess, &mut b, h2, dt, y, o)
-            };
-            let res = match &mut self.direct {
-                Some(sys) => {
-                    let t = std::time::Instant::now();
-                    sys.solve(model, &self.diag, hess, h2, &self.rhs, &mut self.delta)?;
-                    for (d, f) in self.delta.iter_mut().zip(&self.filter) {
-                        *d = f.apply(*d);
-                    }
-                    self.stats.factor_seconds += t.elapsed().as_secs_f64();
-                    self.stats.factorisations += 1;
-                    cg::CgResult {
-                        iterations: 0,
-                        converged: true,
-                    }
-                }
-                None => cg::solve(
-                    &mul,
-                    &self.rhs,
-                    &self.precond,
-                    &self.filter,
-                    &mut self.delta,
-                    self.settings.cg_tolerance,
-                    self.settings.cg_max_iterations,
-                    &mut self.scratch,
-                ),
-            };
-            self.stats.cg_iterations += res.iterations as u64;
+            self.newton_rhs(input, it);
             // The constraint force of particles on a face: A delta - rhs along n, over h^2.
-            let mut ad = vec![Vec3::zeros(); n];
-            mul(&self.delta, &mut ad);
-            self.bend_y = bend_y.into_inner().unwrap();
+            let mut ad = self.newton_delta(model, h2, dt)?;
             let alpha = self.line_search(input);
             for i in 0..n {
                 self.delta[i] *= alpha;
