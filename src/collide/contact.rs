@@ -160,6 +160,15 @@ impl Objects<'_> {
     }
 }
 
+/// A particle being corrected after a step: its new position and velocity (corrected in place),
+/// its thickness, and its sliding state.
+struct Particle<'a> {
+    p1: &'a mut Point3,
+    v: &'a mut Vec3,
+    th: f64,
+    contact: &'a mut Option<Contact>,
+}
+
 /// Collision of one particle with all objects after a step: `p0` its previous position, `p1` and
 /// `v` its new position and velocity (corrected in place), `contact` its sliding state. Objects
 /// whose `reachable` flag is false are skipped. Returns whether it touches an object.
@@ -173,8 +182,9 @@ pub fn resolve(
     th: f64,
     contact: &mut Option<Contact>,
 ) -> bool {
-    let mut touched = match *contact {
-        Some(ct) => slide(colliders, ct, p1, v, th, contact),
+    let p = &mut Particle { p1, v, th, contact };
+    let mut touched = match *p.contact {
+        Some(ct) => slide(colliders, ct, p),
         None => false,
     };
     let objects = Objects {
@@ -182,16 +192,16 @@ pub fn resolve(
         reachable,
     };
     if !touched {
-        if meets_nothing(objects, p0, p1, th) {
+        if meets_nothing(objects, p0, p.p1, th) {
             return false;
         }
-        touched = pass_through(objects, p0, p1, v, th, contact);
+        touched = pass_through(objects, p0, p);
     }
     // A particle held in front of a face where the surface is locally convex is at least the
     // thickness from every face around: nothing more to check.
-    let convex_hold = matches!(*contact, Some(ct) if ct.side > 0.0 && colliders[ct.object as usize].convex[ct.face as usize]);
+    let convex_hold = matches!(*p.contact, Some(ct) if ct.side > 0.0 && colliders[ct.object as usize].convex[ct.face as usize]);
     if (th > 0.0 || colliders.iter().any(|c| c.clearance > 0.0)) && !convex_hold {
-        touched |= keep_thickness(objects, p1, v, th, contact);
+        touched |= keep_thickness(objects, p);
     }
     touched
 }
@@ -200,16 +210,9 @@ pub fn resolve(
 /// projection is inside the face and it has not left it (pushed out to the thickness if it came
 /// closer, never pulled in); else the contact ends. Whether it is still held.
 #[inline]
-fn slide(
-    colliders: &[Collider],
-    ct: Contact,
-    p1: &mut Point3,
-    v: &mut Vec3,
-    th: f64,
-    contact: &mut Option<Contact>,
-) -> bool {
+fn slide(colliders: &[Collider], ct: Contact, p: &mut Particle) -> bool {
     let c = &colliders[ct.object as usize];
-    let th = th + c.clearance;
+    let th = p.th + c.clearance;
     let keep = |f: usize, side: f64, p1: &Point3| -> Option<Point3> {
         let (n, off) = c.plane(f);
         let dp = p1.coords.dot(&n) - off;
@@ -221,26 +224,26 @@ fn slide(
         inside_face(c, f, &q).then(|| if d < th { q + n * (side * th) } else { *p1 })
     };
     let f = ct.face as usize;
-    let mut held = keep(f, ct.side, p1).map(|p| (p, f, ct.side));
+    let mut held = keep(f, ct.side, p.p1).map(|q| (q, f, ct.side));
     if held.is_none() {
         // Objects are prepared with one winding, so the particle is on the same side of the
         // faces around (a side taken from its position would put it inside the object at a
         // convex edge, where it is behind the next face's plane).
         for &g in c.ring(f) {
             let g = g as usize;
-            if let Some(p) = keep(g, ct.side, p1) {
-                held = Some((p, g, ct.side));
+            if let Some(q) = keep(g, ct.side, p.p1) {
+                held = Some((q, g, ct.side));
                 break;
             }
         }
     }
-    let Some((p, g, side)) = held else {
-        *contact = None;
+    let Some((q, g, side)) = held else {
+        *p.contact = None;
         return false;
     };
-    *p1 = p;
-    stop_into(v, &(c.plane(g).0 * side));
-    *contact = Some(Contact {
+    *p.p1 = q;
+    stop_into(p.v, &(c.plane(g).0 * side));
+    *p.contact = Some(Contact {
         object: ct.object,
         face: g as u32,
         side,
@@ -299,37 +302,31 @@ fn earliest_crossing(objects: Objects, p0: &Point3, p1: &Point3, th: f64) -> Opt
 /// correction (three at most). The particle is put on the crossed face's side at the
 /// thickness: over the face, over a face around it, or where its path met the plane.
 /// Whether it crossed anything.
-fn pass_through(
-    objects: Objects,
-    p0: &Point3,
-    p1: &mut Point3,
-    v: &mut Vec3,
-    th: f64,
-    contact: &mut Option<Contact>,
-) -> bool {
+fn pass_through(objects: Objects, p0: &Point3, p: &mut Particle) -> bool {
     let mut touched = false;
     for _ in 0..3 {
-        let Some(h) = earliest_crossing(objects, p0, p1, th) else {
+        let Some(h) = earliest_crossing(objects, p0, p.p1, p.th) else {
             break;
         };
         let c = &objects.colliders[h.object];
-        let th = th + c.clearance;
+        let th = p.th + c.clearance;
         let f = h.face as usize;
         let (n, off) = c.plane(f);
-        let q1 = *p1 - n * (p1.coords.dot(&n) - off);
+        let p1 = *p.p1;
+        let q1 = p1 - n * (p1.coords.dot(&n) - off);
         let (q, face) = if inside_face(c, f, &q1) {
             (q1 + n * (h.side * th), f)
-        } else if let Some(g) = beside(c, f, h.side, p1) {
+        } else if let Some(g) = beside(c, f, h.side, &p1) {
             // Out over a face around: pushed out of it along its normal.
             let (ng, og) = c.plane(g);
-            (*p1 - ng * (p1.coords.dot(&ng) - og) + ng * (h.side * th), g)
+            (p1 - ng * (p1.coords.dot(&ng) - og) + ng * (h.side * th), g)
         } else {
-            let r = p0 + (*p1 - p0) * h.t;
+            let r = p0 + (p1 - p0) * h.t;
             (r - n * (r.coords.dot(&n) - off) + n * (h.side * th), f)
         };
-        *p1 = q;
-        stop_into(v, &(c.plane(face).0 * h.side));
-        *contact = Some(Contact {
+        *p.p1 = q;
+        stop_into(p.v, &(c.plane(face).0 * h.side));
+        *p.contact = Some(Contact {
             object: h.object as u32,
             face: face as u32,
             side: h.side,
@@ -342,25 +339,19 @@ fn pass_through(
 /// Thickness: the particle pushed out of every face nearer than the thickness (plus the
 /// object's clearance), along its normal or away from its edge, in two rounds at most.
 /// Whether it was moved.
-fn keep_thickness(
-    objects: Objects,
-    p1: &mut Point3,
-    v: &mut Vec3,
-    th: f64,
-    contact: &mut Option<Contact>,
-) -> bool {
+fn keep_thickness(objects: Objects, p: &mut Particle) -> bool {
     let mut touched = false;
     for _ in 0..2 {
         let mut moved = false;
         for (oi, c) in objects.each() {
-            let th = th + c.clearance;
-            if !c.bbox.contains(p1, th + c.margin) {
+            let th = p.th + c.clearance;
+            if !c.bbox.contains(p.p1, th + c.margin) {
                 continue;
             }
             let grid = c.grid();
-            let cell = grid.clamp_cell(p1);
+            let cell = grid.clamp_cell(p.p1);
             for &f in grid.cell_faces(grid.linear(cell[0], cell[1], cell[2])) {
-                if push_from_face(c, oi, f as usize, p1, v, th, contact) {
+                if push_from_face(c, oi, f as usize, p.p1, p.v, th, p.contact) {
                     touched = true;
                     moved = true;
                 }
