@@ -11,7 +11,7 @@
 
 use super::TriMesh;
 use crate::math::{Point2, Point3};
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 /// One chain of a section.
 #[derive(Debug, Clone, PartialEq)]
@@ -34,18 +34,47 @@ fn key(a: u32, b: u32) -> (u32, u32) {
     (a.min(b), a.max(b))
 }
 
+/// A mesh edge, its ends in increasing order (see `key`).
+type Edge = (u32, u32);
+
 /// The section of `mesh` by the plane `z = h`.
 pub fn slice(mesh: &TriMesh, h: f64) -> Vec<Loop> {
-    let above = |v: u32| mesh.positions[v as usize].z >= h;
-    let cross = |a: u32, b: u32| {
+    let cross = |(a, b): Edge| {
         let (lo, hi) = (a.min(b), a.max(b));
         let (p, q) = (mesh.positions[lo as usize], mesh.positions[hi as usize]);
         let t = (h - p.z) / (q.z - p.z);
         Point3::new(p.x + t * (q.x - p.x), p.y + t * (q.y - p.y), h)
     };
-    // Segments: from-edge -> (to-edge, point at the from-edge).
-    let mut next: HashMap<(u32, u32), (u32, u32)> = HashMap::new();
-    let mut order: Vec<(u32, u32)> = Vec::new();
+    let (next, order) = segments(mesh, h);
+    // Chain: start open chains at edges nothing leads to, then the closed loops.
+    let targets: HashSet<Edge> = next.values().copied().collect();
+    let mut used: HashSet<Edge> = HashSet::new();
+    let starts: Vec<Edge> = order
+        .iter()
+        .filter(|e| !targets.contains(e))
+        .copied()
+        .chain(order.iter().copied())
+        .collect();
+    let mut loops = Vec::new();
+    for s in starts {
+        if used.contains(&s) {
+            continue;
+        }
+        let (chain, closed) = follow(s, &next, &mut used);
+        loops.push(Loop {
+            points: chain.into_iter().map(cross).collect(),
+            closed,
+        });
+    }
+    loops
+}
+
+/// The segments of the section: from-edge to to-edge (edges as `key`s), and the from-edges in
+/// the order of the faces.
+fn segments(mesh: &TriMesh, h: f64) -> (HashMap<Edge, Edge>, Vec<Edge>) {
+    let above = |v: u32| mesh.positions[v as usize].z >= h;
+    let mut next: HashMap<Edge, Edge> = HashMap::new();
+    let mut order: Vec<Edge> = Vec::new();
     for f in &mesh.faces {
         let up: [bool; 3] = f.map(above);
         if up[0] == up[1] && up[1] == up[2] {
@@ -67,55 +96,35 @@ pub fn slice(mesh: &TriMesh, h: f64) -> Vec<Loop> {
             }
         }
     }
-    // Chain: start open chains at edges nothing leads to, then the closed loops.
-    let targets: std::collections::HashSet<(u32, u32)> = next.values().copied().collect();
-    let mut used: std::collections::HashSet<(u32, u32)> = std::collections::HashSet::new();
-    let mut loops = Vec::new();
-    let starts: Vec<(u32, u32)> = order
-        .iter()
-        .filter(|e| !targets.contains(e))
-        .copied()
-        .chain(order.iter().copied())
-        .collect();
-    for s in starts {
-        if used.contains(&s) {
-            continue;
-        }
-        let mut pts = Vec::new();
-        let mut e = s;
-        let mut closed = false;
-        loop {
-            used.insert(e);
-            pts.push(cross(e.0, e.1));
-            match next.get(&e) {
-                Some(&n) if n == s => {
-                    closed = true;
-                    break;
+    (next, order)
+}
+
+/// The chain of edges from `s` along `next` (each marked `used`), and whether it closes.
+fn follow(s: Edge, next: &HashMap<Edge, Edge>, used: &mut HashSet<Edge>) -> (Vec<Edge>, bool) {
+    let mut chain = Vec::new();
+    let mut e = s;
+    loop {
+        used.insert(e);
+        chain.push(e);
+        match next.get(&e) {
+            Some(&n) if n == s => return (chain, true),
+            Some(&n) if !used.contains(&n) => e = n,
+            Some(&n) => {
+                // An open chain ends on an edge with no segment leaving it.
+                if !next.contains_key(&n) {
+                    chain.push(n);
                 }
-                Some(&n) if !used.contains(&n) => e = n,
-                Some(&n) => {
-                    // An open chain ends on an edge with no segment leaving it.
-                    if !next.contains_key(&n) {
-                        pts.push(cross(n.0, n.1));
-                    }
-                    break;
-                }
-                None => break,
+                break;
             }
+            None => break,
         }
-        if !closed {
-            if let Some(&n) = next.get(&e) {
-                if !used.contains(&n) {
-                    pts.push(cross(n.0, n.1));
-                }
-            }
-        }
-        loops.push(Loop {
-            points: pts,
-            closed,
-        });
     }
-    loops
+    if let Some(&n) = next.get(&e) {
+        if !used.contains(&n) {
+            chain.push(n);
+        }
+    }
+    (chain, false)
 }
 
 /// The convex hull of points in the plane, counter-clockwise, without collinear points
