@@ -21,51 +21,11 @@ pub fn max_frequency(model: &ClothModel, x: &[Point3]) -> f64 {
     if (model.springs.is_empty() && model.bends() == 0) || n == 0 {
         return 0.0;
     }
-    // A fixed pseudo-random start, orthogonal to nothing in particular.
-    let mut rng = crate::math::SplitMix(7);
-    let mut y: Vec<Vec3> = (0..n)
-        .map(|i| {
-            if model.pinned(i) {
-                Vec3::zeros()
-            } else {
-                Vec3::new(
-                    rng.next_f64() - 0.5,
-                    rng.next_f64() - 0.5,
-                    rng.next_f64() - 0.5,
-                )
-            }
-        })
-        .collect();
+    let mut y = random_start(model);
     let mut lambda = 0.0;
     let mut ky = vec![Vec3::zeros(); n];
     for _ in 0..200 {
-        for k in ky.iter_mut() {
-            *k = Vec3::zeros();
-        }
-        for s in &model.springs {
-            let d = x[s.b as usize] - x[s.a as usize];
-            let l = d.norm();
-            if l == 0.0 {
-                continue;
-            }
-            let u = d / l;
-            let rel = y[s.b as usize] - y[s.a as usize];
-            let f = u * (s.k * u.dot(&rel));
-            ky[s.a as usize] += f;
-            ky[s.b as usize] -= f;
-        }
-        for e in 0..model.bends() {
-            let (lo, hi) = (
-                model.bend_start[e] as usize,
-                model.bend_start[e + 1] as usize,
-            );
-            let b = (lo..hi).fold(Vec3::zeros(), |acc, k| {
-                acc + y[model.bend_nodes[k] as usize] * model.bend_weights[k]
-            });
-            for k in lo..hi {
-                ky[model.bend_nodes[k] as usize] -= b * (model.bend_c[e] * model.bend_weights[k]);
-            }
-        }
+        minus_stiffness_times(model, x, &y, &mut ky);
         // z = M^-1 K y (with K y = -ky as gathered above), pinned rows held at zero.
         let mut norm2 = 0.0;
         let mut dot = 0.0;
@@ -95,6 +55,57 @@ pub fn max_frequency(model: &ClothModel, x: &[Point3]) -> f64 {
         lambda = new_lambda;
     }
     lambda.max(0.0).sqrt()
+}
+
+/// The power iteration's start: a fixed pseudo-random vector, orthogonal to nothing in
+/// particular, zero at the pinned particles.
+fn random_start(model: &ClothModel) -> Vec<Vec3> {
+    let mut rng = crate::math::SplitMix(7);
+    (0..model.len())
+        .map(|i| {
+            if model.pinned(i) {
+                Vec3::zeros()
+            } else {
+                Vec3::new(
+                    rng.next_f64() - 0.5,
+                    rng.next_f64() - 0.5,
+                    rng.next_f64() - 0.5,
+                )
+            }
+        })
+        .collect()
+}
+
+/// `ky = -K y`: the springs (linearised at `x`) and the bending elements' stiffness times `y`,
+/// negated.
+fn minus_stiffness_times(model: &ClothModel, x: &[Point3], y: &[Vec3], ky: &mut [Vec3]) {
+    for k in ky.iter_mut() {
+        *k = Vec3::zeros();
+    }
+    for s in &model.springs {
+        let d = x[s.b as usize] - x[s.a as usize];
+        let l = d.norm();
+        if l == 0.0 {
+            continue;
+        }
+        let u = d / l;
+        let rel = y[s.b as usize] - y[s.a as usize];
+        let f = u * (s.k * u.dot(&rel));
+        ky[s.a as usize] += f;
+        ky[s.b as usize] -= f;
+    }
+    for e in 0..model.bends() {
+        let (lo, hi) = (
+            model.bend_start[e] as usize,
+            model.bend_start[e + 1] as usize,
+        );
+        let b = (lo..hi).fold(Vec3::zeros(), |acc, k| {
+            acc + y[model.bend_nodes[k] as usize] * model.bend_weights[k]
+        });
+        for k in lo..hi {
+            ky[model.bend_nodes[k] as usize] -= b * (model.bend_c[e] * model.bend_weights[k]);
+        }
+    }
 }
 
 /// A bound on the highest eigenfrequency (rad/s) of the springs and bending elements at any
