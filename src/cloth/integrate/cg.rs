@@ -71,11 +71,42 @@ pub fn solve(
     scratch: &mut Scratch,
 ) -> CgResult {
     let n = b.len();
-    let Scratch { r, c, q, s } = scratch;
-    for v in [&mut *r, &mut *c, &mut *q, &mut *s] {
+    for v in [
+        &mut scratch.r,
+        &mut scratch.c,
+        &mut scratch.q,
+        &mut scratch.s,
+    ] {
         v.resize(n, Vec3::zeros());
     }
     let pre = |i: usize, v: Vec3| filter[i].apply(precond[i] * filter[i].apply(v));
+    let target = tol * tol * start(mul, b, &pre, filter, x, scratch);
+    let mut delta = dot(&scratch.r, &scratch.c);
+    let mut it = 0;
+    while delta > target && it < max_iterations {
+        let Some(d) = iterate(mul, &pre, filter, x, delta, scratch) else {
+            break;
+        };
+        delta = d;
+        it += 1;
+    }
+    CgResult {
+        iterations: it,
+        converged: delta <= target,
+    }
+}
+
+/// The start: `x` filtered, the residual `r = S (b - A x)`, `c = P r` and `s = P b`; `b^T P b`.
+fn start(
+    mul: &(dyn Fn(&[Vec3], &mut [Vec3]) + Sync),
+    b: &[Vec3],
+    pre: &(impl Fn(usize, Vec3) -> Vec3 + Sync),
+    filter: &[Filter],
+    x: &mut [Vec3],
+    scratch: &mut Scratch,
+) -> f64 {
+    let n = b.len();
+    let Scratch { r, c, q, s } = scratch;
     par::for_chunks(256, x, |base, xs| {
         for (k, xi) in xs.iter_mut().enumerate() {
             *xi = filter[base + k].apply(*xi);
@@ -97,50 +128,55 @@ pub fn solve(
             }
         },
     );
-    let target = tol * tol * dot(b, s);
-    let mut delta = dot(r, c);
-    let mut it = 0;
-    while delta > target && it < max_iterations {
-        mul(c, q);
-        par::for_chunks(256, &mut q[..], |base, qs| {
-            for (k, qi) in qs.iter_mut().enumerate() {
-                *qi = filter[base + k].apply(*qi);
-            }
-        });
-        let cq = dot(c, q);
-        if cq <= 0.0 {
-            break;
+    dot(b, s)
+}
+
+/// One iteration from `delta = r^T P r`: `x` and the residual updated along the direction `c`,
+/// and `c` to the next direction; the new `delta`, or `None` when `c^T A c` is not positive.
+fn iterate(
+    mul: &(dyn Fn(&[Vec3], &mut [Vec3]) + Sync),
+    pre: &(impl Fn(usize, Vec3) -> Vec3 + Sync),
+    filter: &[Filter],
+    x: &mut [Vec3],
+    delta: f64,
+    scratch: &mut Scratch,
+) -> Option<f64> {
+    let Scratch { r, c, q, s } = scratch;
+    let n = r.len();
+    mul(c, q);
+    par::for_chunks(256, &mut q[..], |base, qs| {
+        for (k, qi) in qs.iter_mut().enumerate() {
+            *qi = filter[base + k].apply(*qi);
         }
-        let alpha = delta / cq;
-        par::for_chunks3(
-            256,
-            n,
-            &mut *x,
-            &mut r[..],
-            &mut s[..],
-            |base, xs, rs, ss| {
-                for k in 0..xs.len() {
-                    let i = base + k;
-                    xs[k] += c[i] * alpha;
-                    rs[k] -= q[i] * alpha;
-                    ss[k] = pre(i, rs[k]);
-                }
-            },
-        );
-        let old = delta;
-        delta = dot(r, s);
-        let beta = delta / old;
-        par::for_chunks(256, &mut c[..], |base, cs| {
-            for (k, ci) in cs.iter_mut().enumerate() {
-                *ci = s[base + k] + *ci * beta;
+    });
+    let cq = dot(c, q);
+    if cq <= 0.0 {
+        return None;
+    }
+    let alpha = delta / cq;
+    par::for_chunks3(
+        256,
+        n,
+        &mut *x,
+        &mut r[..],
+        &mut s[..],
+        |base, xs, rs, ss| {
+            for k in 0..xs.len() {
+                let i = base + k;
+                xs[k] += c[i] * alpha;
+                rs[k] -= q[i] * alpha;
+                ss[k] = pre(i, rs[k]);
             }
-        });
-        it += 1;
-    }
-    CgResult {
-        iterations: it,
-        converged: delta <= target,
-    }
+        },
+    );
+    let new = dot(r, s);
+    let beta = new / delta;
+    par::for_chunks(256, &mut c[..], |base, cs| {
+        for (k, ci) in cs.iter_mut().enumerate() {
+            *ci = s[base + k] + *ci * beta;
+        }
+    });
+    Some(new)
 }
 
 #[cfg(test)]
