@@ -729,6 +729,34 @@ fn reach_phase(world: &mut World, travel: f64, step: u64) -> Vec<bool> {
 }
 
 impl Loop {
+    /// Step `step`: the prediction, the solve and the collisions (each phase timed), the new
+    /// state put in place.
+    fn advance(
+        &mut self,
+        world: &mut World,
+        solver: &mut dyn Solver,
+        next: &mut Next,
+        settings: &SolverSettings,
+        step: u64,
+    ) -> Result<(), SimError> {
+        let t = Instant::now();
+        predict(&world.model, &world.state, settings.dt, &mut next.pred);
+        self.stats.predict_seconds += t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let reach = reach_phase(world, self.travel, step);
+        self.solve(world, solver, next, &reach, settings, step)?;
+        self.stats.solve_seconds += t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        self.collide(world, solver, next, &reach, settings);
+        if reach.iter().any(|&r| r) || world.self_contact.is_some() {
+            self.stats.collision_seconds += t.elapsed().as_secs_f64();
+        }
+        std::mem::swap(&mut world.state.x, &mut next.x);
+        std::mem::swap(&mut world.state.v, &mut next.v);
+        self.stats.steps = step;
+        Ok(())
+    }
+
     /// The solve phase: the integrator's step from the state to `next` (with the objects in
     /// `reach` for the contacts it handles itself).
     fn solve(
@@ -894,21 +922,7 @@ pub fn run(
             let c = lp.checkpoint(world, &*solver, step - 1, dt);
             return Err(SimError::Interrupted(Box::new(c)));
         }
-        let t = Instant::now();
-        predict(&world.model, &world.state, dt, &mut next.pred);
-        lp.stats.predict_seconds += t.elapsed().as_secs_f64();
-        let t = Instant::now();
-        let reach = reach_phase(world, lp.travel, step);
-        lp.solve(world, &mut *solver, &mut next, &reach, settings, step)?;
-        lp.stats.solve_seconds += t.elapsed().as_secs_f64();
-        let t = Instant::now();
-        lp.collide(world, &*solver, &mut next, &reach, settings);
-        if reach.iter().any(|&r| r) || world.self_contact.is_some() {
-            lp.stats.collision_seconds += t.elapsed().as_secs_f64();
-        }
-        std::mem::swap(&mut world.state.x, &mut next.x);
-        std::mem::swap(&mut world.state.v, &mut next.v);
-        lp.stats.steps = step;
+        lp.advance(world, &mut *solver, &mut next, settings, step)?;
         if step % check_every(dt) == 0 || step == stop.max_steps() {
             let t = Instant::now();
             let done = lp.measure(world, settings, step, progress)?;
