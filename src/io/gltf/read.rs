@@ -137,6 +137,9 @@ fn local_matrix(node: &gltf_json::Node) -> Matrix4<f64> {
         * Matrix4::new_nonuniform_scaling(&Vector3::from(s))
 }
 
+/// A mesh placed by the scene: the mesh, its world matrix, the key of the node placing it.
+type Instance = (usize, Matrix4<f64>, String);
+
 impl<'a> Doc<'a> {
     fn err(&self, key: String, kind: ProblemKind) -> IoError {
         malformed(self.path, self.format, Location::Key(key), kind)
@@ -296,29 +299,38 @@ impl<'a> Doc<'a> {
     }
 
     /// The (mesh, world matrix, node key) of every mesh the scene places.
-    fn instances(
-        &self,
-        warnings: &mut Vec<String>,
-    ) -> Result<Vec<(usize, Matrix4<f64>, String)>, IoError> {
+    fn instances(&self, warnings: &mut Vec<String>) -> Result<Vec<Instance>, IoError> {
         let r = &self.root;
-        let (roots, from): (Vec<usize>, String) = match (r.scene, r.scenes.first()) {
+        if r.scene.is_none() && r.scenes.is_empty() && r.nodes.is_empty() {
+            if !r.meshes.is_empty() {
+                warnings.push("no nodes: every mesh is read once, as stored".into());
+            }
+            let all = (0..r.meshes.len()).map(|m| (m, Matrix4::identity(), String::new()));
+            return Ok(all.collect());
+        }
+        let (roots, from) = self.root_nodes()?;
+        let (out, hidden) = self.walk_nodes(roots, from)?;
+        if hidden > 0 {
+            warnings.push(format!("{hidden} meshes placed by nodes scaled to zero (hidden, e.g. animation frames not shown) are left out"));
+        }
+        Ok(out)
+    }
+
+    /// The nodes the scene starts from, and the key that lists them: the default scene's, the
+    /// first scene's, or (no scene) every node that is no node's child.
+    fn root_nodes(&self) -> Result<(Vec<usize>, String), IoError> {
+        let r = &self.root;
+        match (r.scene, r.scenes.first()) {
             (Some(s), _) => {
                 let scene = r.scenes.get(s.value()).ok_or_else(|| {
                     self.missing("scene".into(), "scene", s.value(), r.scenes.len())
                 })?;
                 let key = format!("scenes[{}].nodes", s.value());
-                (scene.nodes.iter().map(|n| n.value()).collect(), key)
+                Ok((scene.nodes.iter().map(|n| n.value()).collect(), key))
             }
             (None, Some(scene)) => {
                 let nodes = scene.nodes.iter().map(|n| n.value()).collect();
-                (nodes, "scenes[0].nodes".into())
-            }
-            (None, None) if r.nodes.is_empty() => {
-                if !r.meshes.is_empty() {
-                    warnings.push("no nodes: every mesh is read once, as stored".into());
-                }
-                let all = (0..r.meshes.len()).map(|m| (m, Matrix4::identity(), String::new()));
-                return Ok(all.collect());
+                Ok((nodes, "scenes[0].nodes".into()))
             }
             (None, None) => {
                 let mut child = vec![false; r.nodes.len()];
@@ -329,9 +341,19 @@ impl<'a> Doc<'a> {
                     }
                 }
                 let roots = (0..r.nodes.len()).filter(|&n| !child[n]).collect();
-                (roots, "nodes".into())
+                Ok((roots, "nodes".into()))
             }
-        };
+        }
+    }
+
+    /// The node trees from `roots` (listed at the key `from`), depth first: the (mesh, world
+    /// matrix, node key) of every mesh placed, and how many were hidden (scaled to zero).
+    fn walk_nodes(
+        &self,
+        roots: Vec<usize>,
+        from: String,
+    ) -> Result<(Vec<Instance>, usize), IoError> {
+        let r = &self.root;
         let mut out = Vec::new();
         let mut hidden = 0;
         let mut seen = vec![false; r.nodes.len()];
@@ -372,10 +394,7 @@ impl<'a> Doc<'a> {
             let kids = node.children.iter().flatten().rev();
             stack.extend(kids.map(|c| (c.value(), world, format!("{key}.children"))));
         }
-        if hidden > 0 {
-            warnings.push(format!("{hidden} meshes placed by nodes scaled to zero (hidden, e.g. animation frames not shown) are left out"));
-        }
-        Ok(out)
+        Ok((out, hidden))
     }
 
     fn missing(&self, key: String, what: &str, index: usize, count: usize) -> IoError {
