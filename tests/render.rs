@@ -521,3 +521,108 @@ fn convert_and_fit_previews_are_written_beside_the_output() {
         .count();
     assert!(rows * 2 > cols * 3, "{rows} rows, {cols} columns");
 }
+
+/// Runs `render ARGS`; asserts exit status 1 and a message with `message`; returns stderr.
+fn refused(args: &[&str], message: &str) -> String {
+    let mut all = vec!["render"];
+    all.extend_from_slice(args);
+    let o = common::run(&all);
+    let (_, err) = common::text(&o);
+    assert_eq!(o.status.code(), Some(1), "{args:?}: {err}");
+    assert!(err.contains(message), "{args:?}: {err}");
+    err
+}
+
+#[test]
+fn flags_and_the_output_are_refused_before_any_input_is_read() {
+    // The input does not exist: each refusal comes before reading it.
+    let dir = scratch("early");
+    let nope = dir.path().join("nope.obj");
+    let folder = dir.path().join("folder.png");
+    std::fs::create_dir(&folder).unwrap();
+    let out = dir.path().join("o.png");
+    let err = refused(
+        &[s(&nope), "-o", s(&out), "--width", "15"],
+        "picture size 15",
+    );
+    assert!(!err.contains("nope.obj"), "{err}");
+    let narrow = [
+        s(&nope),
+        "-o",
+        s(&out),
+        "--width",
+        "40",
+        "--view",
+        "projections",
+    ];
+    refused(&narrow, "no room for 3 panel(s)");
+    let err = refused(&[s(&nope), "-o", s(&folder)], "exists and is not a file");
+    assert!(!err.contains("caused by"), "the cause is said once: {err}");
+    let lost = dir.path().join("no/such/folder/o.png");
+    refused(&[s(&nope), "-o", s(&lost)], "does not exist");
+    // 0.01 fps is a delay of 100 s, beyond APNG's 65.535 s: once clamped, now refused.
+    refused(&[s(&nope), "-o", s(&out), "--fps", "0.01"], "--fps 0.01");
+    let mesh = write_obj(dir.path(), "box.obj", &generate::cube(1.0));
+    refused(
+        &[s(&mesh), "-o", s(&out), "--color", "contact"],
+        "--color contact:",
+    );
+    assert_eq!(common::listing(dir.path()), ["box.obj", "folder.png"]);
+}
+
+#[test]
+fn a_frames_folder_of_mixed_frames_is_refused_with_every_problem() {
+    let dir = scratch("mixed");
+    let out = dir.path().join("o.png");
+    let frames = |name: &str, files: &[(&str, TriMesh)]| {
+        let f = dir.path().join(name);
+        std::fs::create_dir(&f).unwrap();
+        for (file, mesh) in files {
+            write_obj(&f, file, mesh);
+        }
+        f
+    };
+    let (cube, quad) = (generate::cube(1.0), quad_xz([0.0, 1.0], [0.0, 1.0], 0.0));
+    let runs = frames(
+        "runs",
+        &[
+            ("sq_0000010.obj", quad.clone()),
+            ("sq_0000020.obj", quad.clone()),
+            ("cape_0000020.obj", quad.clone()),
+            ("sq_0000030.obj", cube.clone()),
+        ],
+    );
+    let err = refused(
+        &[s(&runs), "-o", s(&out)],
+        "2 problems in the frames folder",
+    );
+    assert!(
+        err.contains("step 20 has the piece(s) cape, sq, step 10 has sq"),
+        "{err}"
+    );
+    assert!(
+        err.contains("sq_0000030.obj has 8 vertices and 12 faces"),
+        "{err}"
+    );
+    let twice = frames(
+        "twice",
+        &[("a_01.obj", quad.clone()), ("a_1.obj", quad.clone())],
+    );
+    refused(
+        &[s(&twice), "-o", s(&out)],
+        "a_01.obj and a_1.obj are both piece 'a' at step 1",
+    );
+    assert!(!out.exists());
+    // The same pieces at every step, each with its mesh: an animation.
+    let good = frames(
+        "good",
+        &[
+            ("a_b_9999999.obj", quad.clone()),
+            ("a_9999999.obj", cube.clone()),
+            ("a_b_10000000.obj", quad.clone()),
+            ("a_10000000.obj", cube),
+        ],
+    );
+    let report = render_json(&[s(&good), "-o", s(&out), "--width", "64", "--height", "48"]);
+    assert_eq!(report["frames"], 2);
+}

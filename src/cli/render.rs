@@ -196,19 +196,12 @@ pub fn frame_files(dir: &Path) -> anyhow::Result<Vec<(u64, Vec<PathBuf>)>> {
         if path.extension().and_then(|x| x.to_str()) != Some("obj") {
             continue;
         }
-        let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("");
-        let step = stem
-            .rsplit_once('_')
-            .and_then(|(_, n)| {
-                (!n.is_empty() && n.bytes().all(|b| b.is_ascii_digit())).then_some(n)
-            })
-            .and_then(|n| n.parse::<u64>().ok())
-            .with_context(|| {
-                format!(
-                    "{}: a frame file is named <piece>_<step>.obj (as drape writes them)",
-                    path.display()
-                )
-            })?;
+        let (_, step) = piece_and_step(&path).with_context(|| {
+            format!(
+                "{}: a frame file is named <piece>_<step>.obj (as drape writes them)",
+                path.display()
+            )
+        })?;
         steps.entry(step).or_default().push(path);
     }
     if steps.is_empty() {
@@ -217,13 +210,100 @@ pub fn frame_files(dir: &Path) -> anyhow::Result<Vec<(u64, Vec<PathBuf>)>> {
             dir.display()
         );
     }
-    Ok(steps
-        .into_iter()
-        .map(|(s, mut v)| {
-            v.sort();
-            (s, v)
-        })
-        .collect())
+    for files in steps.values_mut() {
+        files.sort_by_key(|f| piece_and_step(f).map(|(p, _)| p));
+    }
+    Ok(steps.into_iter().collect())
+}
+
+/// The piece and step of a frame file `<piece>_<step>.obj`.
+fn piece_and_step(path: &Path) -> Option<(String, u64)> {
+    let stem = path.file_stem()?.to_str()?;
+    let (piece, n) = stem.rsplit_once('_')?;
+    if n.is_empty() || !n.bytes().all(|b| b.is_ascii_digit()) {
+        return None;
+    }
+    Some((piece.to_string(), n.parse().ok()?))
+}
+
+fn file_name(p: &Path) -> std::borrow::Cow<'_, str> {
+    p.file_name().unwrap_or(p.as_os_str()).to_string_lossy()
+}
+
+/// What keeps the steps from showing the same pieces once each: a piece twice at a step
+/// (`a_01.obj` and `a_1.obj`), or a step with other pieces than the first (two runs' frames).
+fn piece_problems(steps: &[(u64, Vec<PathBuf>)]) -> Vec<String> {
+    let mut problems = Vec::new();
+    let mut first: Option<(u64, Vec<String>)> = None;
+    for (step, files) in steps {
+        let names: Vec<String> = (files.iter().filter_map(|f| piece_and_step(f)))
+            .map(|x| x.0)
+            .collect();
+        for (k, w) in names.windows(2).enumerate().filter(|(_, w)| w[0] == w[1]) {
+            problems.push(format!(
+                "{} and {} are both piece '{}' at step {step}",
+                file_name(&files[k]),
+                file_name(&files[k + 1]),
+                w[0]
+            ));
+        }
+        match &first {
+            None => first = Some((*step, names)),
+            Some((s0, n0)) if *n0 != names => problems.push(format!(
+                "step {step} has the piece(s) {}, step {s0} has {}",
+                names.join(", "),
+                n0.join(", ")
+            )),
+            Some(_) => {}
+        }
+    }
+    problems
+}
+
+/// What keeps each piece from having one mesh at every step: its vertex or face count changes
+/// from the piece's first frame.
+fn mesh_problems(frames: &[Vec<Loaded>]) -> Vec<String> {
+    let size = |l: &Loaded| (l.mesh.positions.len(), l.mesh.faces.len());
+    let mut first: BTreeMap<String, &Loaded> = BTreeMap::new();
+    let mut problems = Vec::new();
+    for b in frames.iter().flatten() {
+        let name = piece_and_step(&b.path).map(|x| x.0).unwrap_or_default();
+        let a = *first.entry(name).or_insert(b);
+        if size(a) != size(b) {
+            problems.push(format!(
+                "{} has {} vertices and {} faces, {} has {} and {}",
+                file_name(&b.path),
+                b.mesh.positions.len(),
+                b.mesh.faces.len(),
+                file_name(&a.path),
+                a.mesh.positions.len(),
+                a.mesh.faces.len()
+            ));
+        }
+    }
+    problems
+}
+
+/// Refuses a frames folder with `problems` (at most 20 listed, the rest counted).
+fn frame_problems(dir: &Path, problems: Vec<String>) -> anyhow::Result<()> {
+    const SHOWN: usize = 20;
+    let why = "the frames of one drape show the same pieces, each with its mesh, at every step";
+    match problems.len() {
+        0 => Ok(()),
+        1 => bail!("{}: {}: {why}", dir.display(), problems[0]),
+        n => {
+            let mut list: String = (problems.iter().take(SHOWN))
+                .map(|p| format!("\n  {p}"))
+                .collect();
+            if n > SHOWN {
+                list += &format!("\n  ... and {} more", n - SHOWN);
+            }
+            bail!(
+                "{}: {n} problems in the frames folder ({why}):{list}",
+                dir.display()
+            )
+        }
+    }
 }
 
 /// A mesh read for drawing, with its rest coordinates if it has them.
@@ -301,11 +381,31 @@ struct Job {
     animated: bool,
 }
 
-/// Checks the flags that need no file.
+/// The slowest animation: 50 s a frame (an APNG delay is at most 65,535 ms).
+pub const MIN_FPS: f64 = 0.02;
+
+/// The picture's options; the colour scale over `range` (`0:1` until the values are known).
+fn options(args: &RenderArgs, range: Option<[f64; 2]>) -> RenderOptions {
+    RenderOptions {
+        width: args.width,
+        height: args.height,
+        layout: args.view,
+        up: args.up,
+        background: args.background,
+        shading: args.shading,
+        scale: scale(args.color, range.unwrap_or([0.0, 1.0])),
+    }
+}
+
+/// Checks the flags and the output, before any file is read.
 fn check_flags(args: &RenderArgs) -> anyhow::Result<Encoding> {
     let enc = encoding(&args.output)?;
-    if !(args.fps.is_finite() && args.fps > 0.0 && args.fps <= 100.0) {
-        bail!("--fps {}: must be above 0 and at most 100", args.fps);
+    options(args, None).check_size()?;
+    if !(args.fps.is_finite() && (MIN_FPS..=100.0).contains(&args.fps)) {
+        bail!(
+            "--fps {}: must be {MIN_FPS} to 100 (a frame shows at most 50 s)",
+            args.fps
+        );
     }
     if !(args.contact_distance.is_finite() && args.contact_distance >= 0.0) {
         bail!(
@@ -322,6 +422,13 @@ fn check_flags(args: &RenderArgs) -> anyhow::Result<Encoding> {
     if args.color == Quantity::Plain && (args.to.is_some() || args.range.is_some()) {
         bail!("--to and --range need --color strain, distance or contact");
     }
+    let inputs: Vec<&Path> = args
+        .meshes
+        .iter()
+        .chain(&args.to)
+        .map(|p| p.as_path())
+        .collect();
+    io::check_target(&args.output, &inputs)?;
     Ok(enc)
 }
 
@@ -331,10 +438,14 @@ fn gather(args: &RenderArgs) -> anyhow::Result<Job> {
     let first = &args.meshes[0];
     let animated = first.is_dir();
     let frames: Vec<Vec<Loaded>> = if animated {
-        frame_files(first)?
-            .into_iter()
+        let steps = frame_files(first)?;
+        let frames: Vec<Vec<Loaded>> = (steps.iter())
             .map(|(_, files)| files.iter().map(|f| load(f, &args.read)).collect())
-            .collect::<anyhow::Result<_>>()?
+            .collect::<anyhow::Result<_>>()?;
+        let mut problems = piece_problems(&steps);
+        problems.extend(mesh_problems(&frames));
+        frame_problems(first, problems)?;
+        frames
     } else {
         vec![vec![load(first, &args.read)?]]
     };
@@ -369,8 +480,8 @@ fn body(args: &RenderArgs, job: &Job) -> anyhow::Result<Option<TriMesh>> {
     };
     if body.faces.is_empty() {
         bail!(
-            "--color {:?}: no body with faces to measure against (give --to BODY, or the body after the cloth)",
-            args.color
+            "--color {}: no body with faces to measure against (give --to BODY, or the body after the cloth)",
+            format!("{:?}", args.color).to_lowercase()
         );
     }
     Ok(Some(body))
@@ -403,15 +514,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         .range
         .or(value_range)
         .filter(|_| args.color != Quantity::Contact);
-    let opts = RenderOptions {
-        width: args.width,
-        height: args.height,
-        layout: args.view,
-        up: args.up,
-        background: args.background,
-        shading: args.shading,
-        scale: scale(args.color, scale_range.unwrap_or([0.0, 1.0])),
-    };
+    let opts = options(&args, scale_range);
     let all_points = || {
         job.frames
             .iter()
@@ -424,26 +527,22 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         .cloth_lift
         .unwrap_or_else(|| render::default_lift(all_points()));
     let colour = |k: usize, default: Rgb| args.mesh_colors.get(k).copied().unwrap_or(default);
-    let pictures: Vec<Image> = job
-        .frames
-        .iter()
-        .zip(&values)
-        .map(|(cloth, vals)| {
-            let items: Vec<Item> = cloth
-                .iter()
-                .zip(vals)
-                .map(|(c, v)| Item::cloth(&c.mesh, colour(0, CLOTH), v.as_deref(), lift))
-                .chain(
-                    job.objects
-                        .iter()
-                        .enumerate()
-                        .map(|(k, o)| Item::object(&o.mesh, colour(k + 1, OBJECT))),
-                )
-                .collect();
-            render::render(&items, &framing, &opts)
-        })
-        .collect::<Result<_, _>>()?;
-    write_pictures(&args, &job, &pictures)?;
+    let items = |k: usize| -> Vec<Item> {
+        let cloth = job.frames[k].iter().zip(&values[k]);
+        cloth
+            .map(|(c, v)| Item::cloth(&c.mesh, colour(0, CLOTH), v.as_deref(), lift))
+            .chain(
+                job.objects
+                    .iter()
+                    .enumerate()
+                    .map(|(k, o)| Item::object(&o.mesh, colour(k + 1, OBJECT))),
+            )
+            .collect()
+    };
+    for k in 0..job.frames.len() {
+        render::check(&items(k))?;
+    }
+    write_pictures(&args, &job, |k| render::render(&items(k), &framing, &opts))?;
     let report = RenderReport {
         output: args.output.display().to_string(),
         format: match (job.encoding, job.animated) {
@@ -454,7 +553,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         .into(),
         width: args.width,
         height: args.height,
-        frames: pictures.len(),
+        frames: job.frames.len(),
         view: view_name(args.view),
         pixels_per_unit: framing.cameras[0].scale,
         color: args.color,
@@ -490,8 +589,13 @@ fn view_name(l: Layout) -> String {
     }
 }
 
-/// Encodes the pictures into the output, atomically, never over an input.
-fn write_pictures(args: &RenderArgs, job: &Job, pictures: &[Image]) -> anyhow::Result<()> {
+/// Draws the pictures (`draw(k)` is frame `k`) into the output, atomically, never over an
+/// input; an animation's frames one at a time, each encoded before the next is drawn.
+fn write_pictures(
+    args: &RenderArgs,
+    job: &Job,
+    draw: impl Fn(usize) -> Result<Image, render::RenderError>,
+) -> anyhow::Result<()> {
     let mut inputs: Vec<&Path> = job
         .frames
         .iter()
@@ -503,11 +607,15 @@ fn write_pictures(args: &RenderArgs, job: &Job, pictures: &[Image]) -> anyhow::R
         inputs.push(t);
     }
     let delay_ms = (1000.0 / args.fps).round() as u16;
+    let (n, size) = (job.frames.len(), [args.width, args.height]);
+    let frames = (0..n).map(|k| draw(k).map_err(std::io::Error::other));
     io::write_atomic(&args.output, &inputs, |w| {
         match (job.encoding, job.animated) {
-            (Encoding::Gif, _) => render::image::write_gif(w, pictures, (delay_ms / 10).max(1)),
-            (Encoding::Png, true) => render::image::write_apng(w, pictures, delay_ms),
-            (Encoding::Png, false) => render::image::write_png(w, &pictures[0]),
+            (Encoding::Gif, _) => render::image::write_gif(w, size, (delay_ms / 10).max(1), frames),
+            (Encoding::Png, true) => render::image::write_apng(w, size, n, delay_ms, frames),
+            (Encoding::Png, false) => {
+                render::image::write_png(w, &draw(0).map_err(std::io::Error::other)?)
+            }
         }
     })?;
     Ok(())

@@ -472,16 +472,62 @@ impl Staged {
 /// target as it was.
 pub fn commit(staged: Vec<Staged>) -> Result<(), IoError> {
     for s in &staged {
-        if let Ok(m) = std::fs::symlink_metadata(&s.path) {
-            if !m.is_file() {
-                return Err(IoError::Write {
-                    path: s.path.clone(),
-                    source: std::io::Error::other("exists and is not a file"),
-                });
-            }
-        }
+        refuse_non_file(&s.path)?;
     }
     staged.into_iter().try_for_each(Staged::commit)
+}
+
+/// Refuses a target that exists and is a directory or another non-file.
+fn refuse_non_file(path: &Path) -> Result<(), IoError> {
+    match std::fs::symlink_metadata(path) {
+        Ok(m) if !m.is_file() => Err(IoError::Write {
+            path: path.to_path_buf(),
+            source: std::io::Error::other("exists and is not a file"),
+        }),
+        _ => Ok(()),
+    }
+}
+
+/// Refuses `path` as an output before any work is done: one of `inputs`, a directory or another
+/// non-file, or in a folder that does not exist (each would fail only when the output is put
+/// in place, after the work).
+///
+/// ```
+/// let dir = tempfile::tempdir().unwrap();
+/// let err = drapekit::io::check_target(dir.path(), &[]).unwrap_err();
+/// assert!(err.to_string().ends_with("exists and is not a file"));
+/// let err = drapekit::io::check_target(&dir.path().join("no/x.png"), &[]).unwrap_err();
+/// assert!(err.to_string().contains("does not exist"));
+/// assert!(drapekit::io::check_target(&dir.path().join("x.png"), &[]).is_ok());
+/// ```
+pub fn check_target(path: &Path, inputs: &[&Path]) -> Result<(), IoError> {
+    refuse_inputs(path, inputs)?;
+    refuse_non_file(path)?;
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    if !dir.is_dir() {
+        return Err(IoError::Write {
+            path: path.to_path_buf(),
+            source: std::io::Error::new(
+                std::io::ErrorKind::NotFound,
+                format!("the folder {} does not exist", dir.display()),
+            ),
+        });
+    }
+    Ok(())
+}
+
+/// Refuses `path` when it is one of `inputs`.
+fn refuse_inputs(path: &Path, inputs: &[&Path]) -> Result<(), IoError> {
+    match inputs.iter().find(|i| same_file(path, i)) {
+        Some(input) => Err(IoError::WouldOverwriteInput {
+            path: path.to_path_buf(),
+            input: input.to_path_buf(),
+        }),
+        None => Ok(()),
+    }
 }
 
 /// Writes through `body` into a temporary file beside `path` (closed when done) and returns it
@@ -490,14 +536,7 @@ pub fn stage<F>(path: &Path, inputs: &[&Path], body: F) -> Result<Staged, IoErro
 where
     F: FnOnce(&mut BufWriter<&std::fs::File>) -> std::io::Result<()>,
 {
-    for input in inputs {
-        if same_file(path, input) {
-            return Err(IoError::WouldOverwriteInput {
-                path: path.to_path_buf(),
-                input: input.to_path_buf(),
-            });
-        }
-    }
+    refuse_inputs(path, inputs)?;
     let werr = |source: std::io::Error| IoError::Write {
         path: path.to_path_buf(),
         source,

@@ -74,28 +74,63 @@ pub fn write_png(w: impl Write, img: &Image) -> std::io::Result<()> {
     writer.finish().map_err(png_error)
 }
 
-/// Writes `frames` (all of one size, at least one) as an animated PNG that loops forever,
+/// A frame's size against the animation's: an error when they differ.
+fn same_size(f: &Image, size: [u32; 2]) -> std::io::Result<()> {
+    if [f.width, f.height] == size {
+        return Ok(());
+    }
+    Err(std::io::Error::other(format!(
+        "a frame of {} x {} px in an animation of {} x {} px",
+        f.width, f.height, size[0], size[1]
+    )))
+}
+
+/// Writes `count` frames of `size` px (at least one) as an animated PNG that loops forever,
 /// showing each for `delay_ms` milliseconds. Viewers without APNG support show the first.
-pub fn write_apng(w: impl Write, frames: &[Image], delay_ms: u16) -> std::io::Result<()> {
-    let first = &frames[0];
-    let mut enc = png::Encoder::new(w, first.width, first.height);
+/// Each frame is encoded as soon as `frames` yields it, so only one is ever held; an error
+/// from `frames`, a frame of another size or a count other than `count` stops the writing.
+pub fn write_apng<B: std::borrow::Borrow<Image>>(
+    w: impl Write,
+    size: [u32; 2],
+    count: usize,
+    delay_ms: u16,
+    frames: impl IntoIterator<Item = std::io::Result<B>>,
+) -> std::io::Result<()> {
+    let n = u32::try_from(count).map_err(std::io::Error::other)?;
+    let mut enc = png::Encoder::new(w, size[0], size[1]);
     enc.set_color(png::ColorType::Rgb);
     enc.set_depth(png::BitDepth::Eight);
-    enc.set_animated(frames.len() as u32, 0)
-        .map_err(png_error)?;
+    enc.set_animated(n, 0).map_err(png_error)?;
     enc.set_frame_delay(delay_ms, 1000).map_err(png_error)?;
     let mut writer = enc.write_header().map_err(png_error)?;
+    let mut written = 0;
     for f in frames {
-        writer.write_image_data(&f.bytes()).map_err(png_error)?;
+        let f = f?;
+        same_size(f.borrow(), size)?;
+        writer
+            .write_image_data(&f.borrow().bytes())
+            .map_err(png_error)?;
+        written += 1;
+    }
+    if written != count {
+        return Err(std::io::Error::other(format!(
+            "{written} frame(s) for an animation of {count}"
+        )));
     }
     writer.finish().map_err(png_error)
 }
 
-/// Writes `frames` (all of one size, at least one) as a GIF that loops forever, showing each
-/// for `delay_cs` hundredths of a second.
-pub fn write_gif(w: impl Write, frames: &[Image], delay_cs: u16) -> std::io::Result<()> {
-    let first = &frames[0];
-    let (width, height) = (first.width as u16, first.height as u16);
+/// Writes the frames of `size` px (at least one) as a GIF that loops forever, showing each for
+/// `delay_cs` hundredths of a second, each encoded as soon as `frames` yields it (one held at a
+/// time).
+pub fn write_gif<B: std::borrow::Borrow<Image>>(
+    w: impl Write,
+    size: [u32; 2],
+    delay_cs: u16,
+    frames: impl IntoIterator<Item = std::io::Result<B>>,
+) -> std::io::Result<()> {
+    let side = |v: u32| u16::try_from(v).map_err(std::io::Error::other);
+    let (width, height) = (side(size[0])?, side(size[1])?);
     let gif_error = |e: gif::EncodingError| match e {
         gif::EncodingError::Io(e) => e,
         e => std::io::Error::other(e),
@@ -103,9 +138,63 @@ pub fn write_gif(w: impl Write, frames: &[Image], delay_cs: u16) -> std::io::Res
     let mut enc = gif::Encoder::new(w, width, height, &[]).map_err(gif_error)?;
     enc.set_repeat(gif::Repeat::Infinite).map_err(gif_error)?;
     for f in frames {
-        let mut frame = gif::Frame::from_rgb_speed(width, height, &f.bytes(), 10);
+        let f = f?;
+        same_size(f.borrow(), size)?;
+        let mut frame = gif::Frame::from_rgb_speed(width, height, &f.borrow().bytes(), 10);
         frame.delay = delay_cs;
         enc.write_frame(&frame).map_err(gif_error)?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::cell::RefCell;
+    use std::rc::Rc;
+
+    /// A writer whose bytes can be counted while it is in use.
+    #[derive(Clone, Default)]
+    struct Shared(Rc<RefCell<Vec<u8>>>);
+
+    impl Write for Shared {
+        fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
+            self.0.borrow_mut().extend_from_slice(b);
+            Ok(b.len())
+        }
+        fn flush(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn animations_are_written_a_frame_at_a_time() {
+        for gif in [false, true] {
+            let out = Shared::default();
+            // The bytes written before each frame is made: an encoder that gathered every
+            // frame before writing any would see the same count at each.
+            let seen = RefCell::new(Vec::new());
+            let make = |k: usize| {
+                seen.borrow_mut().push(out.0.borrow().len());
+                Ok(Image::new(16, 16, [k as u8 * 40, 0, 0]))
+            };
+            let frames = (0..4).map(make);
+            if gif {
+                write_gif(out.clone(), [16, 16], 10, frames).unwrap();
+            } else {
+                write_apng(out.clone(), [16, 16], 4, 100, frames).unwrap();
+            }
+            let seen = seen.into_inner();
+            assert!(seen.windows(2).all(|w| w[1] > w[0]), "gif {gif}: {seen:?}");
+        }
+    }
+
+    #[test]
+    fn an_animation_of_the_wrong_count_or_size_is_refused() {
+        let f = |w| Ok(Image::new(w, 16, [0; 3]));
+        let short = write_apng(Vec::new(), [16, 16], 3, 100, [f(16), f(16)]);
+        assert!(short.unwrap_err().to_string().contains("2 frame(s)"));
+        let wide = write_gif(Vec::new(), [16, 16], 10, [f(16), f(20)]);
+        assert!(wide.unwrap_err().to_string().contains("20 x 16 px"));
+    }
 }

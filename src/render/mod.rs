@@ -220,6 +220,19 @@ pub struct Framing {
 }
 
 impl RenderOptions {
+    /// Checks the picture's size, and its width against the panels and the legend (a scale's
+    /// range does not matter), so a command can refuse them before reading its inputs.
+    ///
+    /// ```
+    /// use drapekit::render::{Layout, RenderOptions};
+    /// let opts = RenderOptions { width: 40, layout: Layout::Projections, ..Default::default() };
+    /// assert!(opts.check_size().is_err());
+    /// assert!(RenderOptions::default().check_size().is_ok());
+    /// ```
+    pub fn check_size(&self) -> Result<(), RenderError> {
+        self.panels().map(|_| ())
+    }
+
     /// The panel size and the legend's place, after checking the sizes.
     fn panels(&self) -> Result<([u32; 2], Option<u32>), RenderError> {
         let (w, h) = (self.width, self.height);
@@ -261,8 +274,9 @@ pub fn render_fitted(items: &[Item], opts: &RenderOptions) -> Result<Image, Rend
     render(items, &framing, opts)
 }
 
-/// Checks the items: some face to draw, values one per vertex and finite.
-fn check(items: &[Item]) -> Result<(), RenderError> {
+/// Checks the items: some face to draw, values one per vertex and finite ([`render`] checks
+/// them too; an animation checks every frame before it writes any).
+pub fn check(items: &[Item]) -> Result<(), RenderError> {
     if items.iter().all(|i| i.mesh.faces.is_empty()) {
         return Err(RenderError::Empty);
     }
