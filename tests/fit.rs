@@ -730,3 +730,83 @@ fn output_units_and_up_axis() {
     );
     assert!(m.signed_volume() > 0.0, "still outward after the rotation");
 }
+
+/// Runs `fit ARGS`; asserts exit status 1 and a message with each of `parts`.
+fn fit_refused(args: &[&str], parts: &[&str]) {
+    let mut all = vec!["fit"];
+    all.extend_from_slice(args);
+    let o = run(&all);
+    let (_, err) = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{args:?}: {err}");
+    assert!(parts.iter().all(|m| err.contains(m)), "{args:?}: {err}");
+}
+
+#[test]
+fn flags_and_outputs_are_refused_before_the_input_is_read_with_every_problem() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    let (nope, out) = (p("nope.toml"), p("form.obj"));
+    // Every count out of range at once (--stride 0 was 'nodes around ... at least 3').
+    let counts = [
+        "--nodes", "0", "--around", "2", "--along", "1", "--stride", "0",
+    ];
+    let all = [
+        "4 problems:",
+        "--nodes 0: at least 3",
+        "--around 2",
+        "--along 1",
+        "--stride 0",
+    ];
+    fit_refused(
+        &[&["--measurements", &nope, "-o", &out][..], &counts].concat(),
+        &all,
+    );
+    // --levels 0 gave a model of 10 sections without a word.
+    fit_refused(
+        &["--measurements", &nope, "-o", &out, "--levels", "0"],
+        &["--levels 0"],
+    );
+    // The hint named convert's --to, which in fit is the top of the band.
+    fit_refused(
+        &["--measurements", &nope, "-o", &p("f.png")],
+        &["give --format"],
+    );
+    fit_refused(
+        &["--measurements", &nope, "-o", &p("no/f.obj")],
+        &["does not exist"],
+    );
+    let units = ["--measurements", &nope, "-o", &out, "--units", "mm"];
+    fit_refused(&units, &["--units applies"]);
+    fit_refused(
+        &["--from-mesh", &nope, "-o", &out, "--from", "nan"],
+        &["--from NaN"],
+    );
+    // The report over the form or its preview: the form was written, then the run failed
+    // (or the preview was overwritten by the report).
+    let report = ["--measurements", &nope, "-o", &out, "--report"];
+    let over = ["written over an output"];
+    fit_refused(&[&report[..], &[&out]].concat(), &over);
+    let png = p("form.png");
+    fit_refused(&[&report[..], &[&png, "--preview"]].concat(), &over);
+    let r = p("r.json");
+    std::fs::create_dir(&r).unwrap();
+    let folder = [&report[..], &[&r]].concat();
+    fit_refused(&folder, &["exists and is not a file"]);
+    assert_eq!(listing(dir.path()), ["r.json"]);
+    // A sections file that says its units, and --units that says others.
+    let json = sections_json(dir.path(), "s.json", "m", &[(0.0, circle(1.0, 8))]);
+    let other = [
+        "--sections",
+        json.to_str().unwrap(),
+        "-o",
+        &out,
+        "--units",
+        "mm",
+    ];
+    fit_refused(&other, &["key 'units': the file says m, --units says mm"]);
+    // A scan whose every face is degenerate: 'the body mesh is empty', no file named.
+    let line = p("line.obj");
+    std::fs::write(&line, "v 0 0 0\nv 1 1 1\nv 2 2 2\nf 1 2 3\n").unwrap();
+    let scan = ["--from-mesh", &line, "-o", &out];
+    fit_refused(&scan, &["line.obj: every face of the mesh is degenerate"]);
+}

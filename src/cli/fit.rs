@@ -165,6 +165,13 @@ struct Source {
 fn load(args: &FitArgs) -> Result<Source, FitError> {
     if let Some(p) = &args.sections {
         let f = input::read(p)?;
+        if let Some((file, flag)) = f.units.zip(args.units).filter(|(a, b)| a != b) {
+            return Err(FitError::Key {
+                path: p.clone(),
+                key: "units".into(),
+                message: format!("the file says {file}, --units says {flag}: give one"),
+            });
+        }
         let units = f.units.or(args.units).unwrap_or(Units::M);
         let mut targets = section_targets(&f.sections, "section");
         for (t, n) in targets.iter_mut().zip(&f.names) {
@@ -210,6 +217,12 @@ fn load(args: &FitArgs) -> Result<Source, FitError> {
     }
     crate::fit::scan::check_up(&body, args.up, p)?;
     prepare(&mut body, &PrepareOptions::default());
+    if body.faces.is_empty() {
+        return Err(FitError::Options(format!(
+            "{}: every face of the mesh is degenerate (no area): no body to slice",
+            p.display()
+        )));
+    }
     change_up(&mut body, args.up, Up::Z);
     let opts = ScanOptions {
         levels: args.levels.unwrap_or(60),
@@ -231,15 +244,26 @@ fn load(args: &FitArgs) -> Result<Source, FitError> {
     })
 }
 
-/// Runs `drapekit fit`.
-pub fn run(args: FitArgs) -> anyhow::Result<()> {
-    let start = Instant::now();
-    let wopts = WriteOptions {
-        format: args.format,
-        ascii: args.ascii,
-    };
+/// The input file.
+fn source_path(args: &FitArgs) -> &Path {
+    let given = [&args.sections, &args.measurements, &args.from_mesh];
+    let first = given.into_iter().flatten().next();
+    first.map_or(Path::new(""), PathBuf::as_path)
+}
+
+/// Checks the flags and the outputs, before the input is read: the flags that do not apply,
+/// the counts (every problem), and the form, preview and report paths (none an input, a
+/// folder, in a missing folder, or another of them).
+fn check_args(args: &FitArgs, wopts: &WriteOptions) -> anyhow::Result<()> {
+    let format = io::output_format(&args.output, wopts).map_err(|e| match e {
+        io::IoError::UnknownOutputFormat { ext, .. } => anyhow::anyhow!(
+            "cannot write {}: unknown output format for extension '{ext}'; give --format triples|obj|stl|ply|glb|gltf",
+            args.output.display()
+        ),
+        e => e.into(),
+    })?;
     super::warn(
-        &super::ascii_warning(args.ascii, io::output_format(&args.output, &wopts)?)
+        &super::ascii_warning(args.ascii, format)
             .into_iter()
             .collect::<Vec<_>>(),
     );
@@ -249,16 +273,76 @@ pub fn run(args: FitArgs) -> anyhow::Result<()> {
     if args.from_mesh.is_none() && (args.from.is_some() || args.to.is_some()) {
         anyhow::bail!("--from and --to set the slicing band of --from-mesh");
     }
-    if let Some(levels) = args.levels {
-        fitter::check_count("--levels", levels, fitter::MAX_LEVELS, "sections")?;
+    for (flag, v) in [("--from", args.from), ("--to", args.to)] {
+        if let Some(v) = v.filter(|v| !v.is_finite()) {
+            anyhow::bail!("{flag} {v}: expected a height in the mesh's units");
+        }
     }
-    FitOptions {
+    if args.measurements.is_some() && args.units.is_some() {
+        anyhow::bail!("--units applies to sections files and meshes; a measurement set gives its own (key 'units', default cm)");
+    }
+    let mut problems = Vec::new();
+    if let Some(levels) = args.levels {
+        problems
+            .extend(fitter::check_count("--levels", levels, fitter::MAX_LEVELS, "sections").err());
+        if levels < 3 {
+            problems.push(FitError::TooSmall {
+                flag: "--levels".into(),
+                value: levels as u64,
+                min: 3,
+                what: "levels (a surface needs 3)".into(),
+            });
+        }
+    }
+    let counts = FitOptions {
         nodes_around: args.nodes,
         around: args.around,
         along: args.along,
+        stride: args.stride,
         ..FitOptions::default()
+    };
+    problems.extend(counts.check_counts().err());
+    FitError::from_problems(problems)?;
+    check_outputs(args)
+}
+
+/// The form, the preview and the report: each refused before any work when it is an input,
+/// a folder or in a missing folder, or when two of them are one file.
+fn check_outputs(args: &FitArgs) -> anyhow::Result<()> {
+    let mut taken = vec![source_path(args)];
+    io::check_target(&args.output, &taken)?;
+    taken.push(&args.output);
+    let preview = super::render::preview_path(&args.output);
+    if args.preview {
+        if preview == args.output {
+            anyhow::bail!(
+                "{}: the preview would be written over the output; give the output a mesh extension",
+                args.output.display()
+            );
+        }
+        io::check_target(&preview, &taken)?;
+        taken.push(&preview);
     }
-    .check_counts()?;
+    if let Some(r) = &args.report {
+        if taken[1..].iter().any(|t| io::same_target(t, r)) {
+            anyhow::bail!(
+                "--report {}: the report would be written over an output",
+                r.display()
+            );
+        }
+        io::check_target(r, &taken)?;
+    }
+    Ok(())
+}
+
+/// Runs `drapekit fit`.
+pub fn run(args: FitArgs) -> anyhow::Result<()> {
+    let start = Instant::now();
+    let wopts = WriteOptions {
+        format: args.format,
+        ascii: args.ascii,
+    };
+    check_args(&args, &wopts)?;
     let src = load(&args)?;
     let tolerance = args
         .tolerance
@@ -284,12 +368,6 @@ pub fn run(args: FitArgs) -> anyhow::Result<()> {
     let mut staged = vec![staged];
     let preview = if args.preview {
         let p = super::render::preview_path(&args.output);
-        if p == args.output {
-            anyhow::bail!(
-                "{}: the preview would be written over the output; give the output a mesh extension",
-                args.output.display()
-            );
-        }
         let item = crate::render::Item::object(&mesh, super::render::OBJECT);
         let view = crate::render::View::Front;
         staged.push(super::render::stage_preview(

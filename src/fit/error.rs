@@ -101,6 +101,17 @@ pub enum FitError {
         limit: u64,
         what: String,
     },
+    /// A count from a flag below what the fit needs.
+    #[error("{flag} {value}: at least {min} {what}")]
+    TooSmall {
+        flag: String,
+        value: u64,
+        min: u64,
+        what: String,
+    },
+    /// Several problems, each its own error.
+    #[error("{} problems:{}", .0.len(), .0.iter().map(|e| format!("\n  {e}")).collect::<String>())]
+    Several(Vec<FitError>),
     /// Options that cannot work together.
     #[error("{0}")]
     Options(String),
@@ -121,6 +132,15 @@ impl FitError {
                 Err(FitError::Key { path, key, message })
             }
             _ => Err(FitError::Keys { path, problems }),
+        }
+    }
+
+    /// `Ok` for no problems, the problem for one, [`FitError::Several`] for more.
+    pub fn from_problems(mut problems: Vec<FitError>) -> Result<(), FitError> {
+        match problems.len() {
+            0 => Ok(()),
+            1 => Err(problems.remove(0)),
+            _ => Err(FitError::Several(problems)),
         }
     }
 

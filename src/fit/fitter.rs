@@ -83,20 +83,49 @@ pub struct FitOptions {
 }
 
 impl FitOptions {
-    /// Refuses counts above [`MAX_NODES_AROUND`] and [`MAX_OUTPUT_VERTICES`], naming the flag.
+    /// Refuses counts out of range, naming each flag and listing every problem: `--nodes` 3 to
+    /// [`MAX_NODES_AROUND`], `--around` at least 3, `--along` at least 2, `--stride` at least
+    /// 1, `--around` times `--along` at most [`MAX_OUTPUT_VERTICES`].
+    ///
+    /// ```
+    /// use drapekit::fit::fitter::FitOptions;
+    /// let opts = FitOptions { nodes_around: 0, stride: 0, ..FitOptions::default() };
+    /// let e = opts.check_counts().unwrap_err().to_string();
+    /// assert!(e.starts_with("2 problems:") && e.contains("--nodes 0: at least 3"), "{e}");
+    /// assert!(e.contains("--stride 0: at least 1"), "{e}");
+    /// ```
     pub fn check_counts(&self) -> Result<(), FitError> {
-        check_count(
-            "--nodes",
-            self.nodes_around,
-            MAX_NODES_AROUND,
-            "nodes around each section",
-        )?;
-        check_count(
-            "--around x --along",
-            self.around.saturating_mul(self.along),
-            MAX_OUTPUT_VERTICES,
-            "vertices of the form",
-        )
+        let low = [
+            ("--nodes", self.nodes_around, 3, "nodes around each section"),
+            ("--around", self.around, 3, "points around each ring"),
+            ("--along", self.along, 2, "rings along the height"),
+            ("--stride", self.stride, 1, "(1: every section)"),
+        ];
+        let mut problems: Vec<FitError> = (low.iter())
+            .filter(|(_, v, min, _)| v < min)
+            .map(|&(flag, value, min, what)| FitError::TooSmall {
+                flag: flag.into(),
+                value: value as u64,
+                min: min as u64,
+                what: what.into(),
+            })
+            .collect();
+        let high = [
+            check_count(
+                "--nodes",
+                self.nodes_around,
+                MAX_NODES_AROUND,
+                "nodes around each section",
+            ),
+            check_count(
+                "--around x --along",
+                self.around.saturating_mul(self.along),
+                MAX_OUTPUT_VERTICES,
+                "vertices of the form",
+            ),
+        ];
+        problems.extend(high.into_iter().filter_map(Result::err));
+        FitError::from_problems(problems)
     }
 }
 
@@ -359,11 +388,6 @@ pub fn fit_sections(
 
 /// The options' counts and order within what the fit supports.
 fn check_options(opts: &FitOptions) -> Result<(), FitError> {
-    if opts.nodes_around < 3 || opts.around < 3 || opts.along < 2 || opts.stride < 1 {
-        return Err(FitError::Options(
-            "nodes around and points around must be at least 3, rings along at least 2".into(),
-        ));
-    }
     opts.check_counts()?;
     if opts.lanczos > lanczos::MAX_ORDER {
         return Err(FitError::Options(format!(

@@ -79,6 +79,15 @@ pub fn check_up(body: &TriMesh, up: Up, path: &std::path::Path) -> Result<(), Fi
     Ok(())
 }
 
+/// `x` in full, or in exponent form beyond a billion (`1e300`, not 301 digits).
+fn number(x: f64) -> String {
+    if x.abs() < 1e9 {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
+
 /// The torso sections of a Z-up body mesh, and the band `(from, to)` they span.
 pub fn torso_sections(
     body: &TriMesh,
@@ -150,8 +159,11 @@ fn band(body: &TriMesh, opts: &ScanOptions) -> Result<(f64, f64), FitError> {
     let to = opts.to.unwrap_or(b.min.z + DEFAULT_BAND.1 * height);
     if from >= to || from <= b.min.z || to >= b.max.z || from.is_nan() || to.is_nan() {
         return Err(FitError::Options(format!(
-            "the band --from {from} --to {to} must be increasing and inside the body's height range {} .. {}",
-            b.min.z, b.max.z
+            "the band --from {} --to {} must be increasing and inside the body's height range {} .. {}",
+            number(from),
+            number(to),
+            number(b.min.z),
+            number(b.max.z)
         )));
     }
     if opts.levels < 3 {

@@ -432,6 +432,19 @@ pub fn same_file(a: &Path, b: &Path) -> bool {
     }
 }
 
+/// Whether `a` and `b` name one file: the same file now ([`same_file`]), or the same absolute
+/// path (two outputs, neither written yet).
+///
+/// ```
+/// use std::path::Path;
+/// assert!(drapekit::io::same_target(Path::new("./out/a.json"), Path::new("out//a.json")));
+/// assert!(!drapekit::io::same_target(Path::new("out/a.json"), Path::new("out/b.json")));
+/// ```
+pub fn same_target(a: &Path, b: &Path) -> bool {
+    same_file(a, b)
+        || matches!((std::path::absolute(a), std::path::absolute(b)), (Ok(x), Ok(y)) if x == y)
+}
+
 /// Writes through `body` into a temporary file beside `path`, then renames it to `path`. On any
 /// error the temporary file is removed and `path` is untouched. Refuses when `path` is one of
 /// `inputs`.
