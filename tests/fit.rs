@@ -775,8 +775,14 @@ fn flags_and_outputs_are_refused_before_the_input_is_read_with_every_problem() {
         &["--measurements", &nope, "-o", &p("no/f.obj")],
         &["does not exist"],
     );
-    let units = ["--measurements", &nope, "-o", &out, "--units", "mm"];
-    fit_refused(&units, &["--units applies"]);
+    // --units against a measurement set that states others (it was ignored without a word);
+    // the same units are accepted.
+    let size38 = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/fixtures/measurements_size38.toml"
+    );
+    let units = ["--measurements", size38, "-o", &out, "--units", "mm"];
+    fit_refused(&units, &["key 'units': the file says cm, --units says mm"]);
     fit_refused(
         &["--from-mesh", &nope, "-o", &out, "--from", "nan"],
         &["--from NaN"],
@@ -809,4 +815,7 @@ fn flags_and_outputs_are_refused_before_the_input_is_read_with_every_problem() {
     std::fs::write(&line, "v 0 0 0\nv 1 1 1\nv 2 2 2\nf 1 2 3\n").unwrap();
     let scan = ["--from-mesh", &line, "-o", &out];
     fit_refused(&scan, &["line.obj: every face of the mesh is degenerate"]);
+    // The units the set states, given again, are accepted.
+    let agreed = ["--measurements", size38, "-o", &out, "--units", "cm"];
+    assert_eq!(fit_cli(&agreed).0["units"].as_str(), Some("cm"));
 }

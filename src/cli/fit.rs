@@ -33,7 +33,8 @@ pub struct FitArgs {
     /// Write ASCII STL or PLY.
     #[arg(long)]
     pub ascii: bool,
-    /// Units of a CSV sections file or of the mesh (JSON and TOML say their own) [default: m].
+    /// Units of a CSV sections file or of the mesh [default: m]. Files that state their own
+    /// (JSON sections, measurement sets) refuse a --units that disagrees.
     #[arg(long, value_name = "U", value_parser = parse_units)]
     pub units: Option<Units>,
     /// Write the form in these units [default: the input's].
@@ -162,16 +163,23 @@ struct Source {
     band: Option<[f64; 2]>,
 }
 
+/// A `--units` that disagrees with the units the input file states is refused (one that
+/// agrees, or a file that states none, is fine).
+fn units_agree(p: &Path, file: Option<Units>, flag: Option<Units>) -> Result<(), FitError> {
+    match file.zip(flag) {
+        Some((file, flag)) if file != flag => Err(FitError::Key {
+            path: p.to_path_buf(),
+            key: "units".into(),
+            message: format!("the file says {file}, --units says {flag}: give one"),
+        }),
+        _ => Ok(()),
+    }
+}
+
 fn load(args: &FitArgs) -> Result<Source, FitError> {
     if let Some(p) = &args.sections {
         let f = input::read(p)?;
-        if let Some((file, flag)) = f.units.zip(args.units).filter(|(a, b)| a != b) {
-            return Err(FitError::Key {
-                path: p.clone(),
-                key: "units".into(),
-                message: format!("the file says {file}, --units says {flag}: give one"),
-            });
-        }
+        units_agree(p, f.units, args.units)?;
         let units = f.units.or(args.units).unwrap_or(Units::M);
         let mut targets = section_targets(&f.sections, "section");
         for (t, n) in targets.iter_mut().zip(&f.names) {
@@ -195,6 +203,7 @@ fn load(args: &FitArgs) -> Result<Source, FitError> {
         let imported = crate::fit::foreign::read_any(p)?;
         let m = &imported.measurements;
         let (sections, targets, units) = measurements::sections(m, p, args.levels.unwrap_or(41))?;
+        units_agree(p, Some(units), args.units)?;
         return Ok(Source {
             path: p.clone(),
             kind: "measurements",
@@ -277,9 +286,6 @@ fn check_args(args: &FitArgs, wopts: &WriteOptions) -> anyhow::Result<()> {
         if let Some(v) = v.filter(|v| !v.is_finite()) {
             anyhow::bail!("{flag} {v}: expected a height in the mesh's units");
         }
-    }
-    if args.measurements.is_some() && args.units.is_some() {
-        anyhow::bail!("--units applies to sections files and meshes; a measurement set gives its own (key 'units', default cm)");
     }
     let mut problems = Vec::new();
     if let Some(levels) = args.levels {
