@@ -562,11 +562,20 @@ fn flags_and_the_output_are_refused_before_any_input_is_read() {
     refused(&[s(&nope), "-o", s(&lost)], "does not exist");
     // 0.01 fps is a delay of 100 s, beyond APNG's 65.535 s: once clamped, now refused.
     refused(&[s(&nope), "-o", s(&out), "--fps", "0.01"], "--fps 0.01");
+    let two = [s(&nope), "-o", s(&out), "--mesh-colors", "#ff0000,#00ff00"];
+    refused(&two, "--mesh-colors: 2 colours for 1 mesh(es)");
     let mesh = write_obj(dir.path(), "box.obj", &generate::cube(1.0));
+    let contact = [s(&mesh), "-o", s(&out), "--color", "contact"];
+    refused(&contact, "--color contact:");
+    // A strain of 1e90 / 1e-250: 'mesh 0: the value of vertex 0 is not finite', no file.
+    let far = dir.path().join("far.obj");
+    let obj = "v 0 0 0\nv 1e90 0 0\nv 0 1 0\nvt 0 0\nvt 1e-250 0\nvt 0 1\nf 1/1 2/2 3/3\n";
+    std::fs::write(&far, obj).unwrap();
     refused(
-        &[s(&mesh), "-o", s(&out), "--color", "contact"],
-        "--color contact:",
+        &[s(&far), "-o", s(&out), "--color", "strain"],
+        "far.obj: strain",
     );
+    std::fs::remove_file(&far).unwrap();
     assert_eq!(common::listing(dir.path()), ["box.obj", "folder.png"]);
 }
 

@@ -422,6 +422,13 @@ fn check_flags(args: &RenderArgs) -> anyhow::Result<Encoding> {
     if args.color == Quantity::Plain && (args.to.is_some() || args.range.is_some()) {
         bail!("--to and --range need --color strain, distance or contact");
     }
+    if args.mesh_colors.len() > args.meshes.len() {
+        bail!(
+            "--mesh-colors: {} colours for {} mesh(es): one per mesh given, in order",
+            args.mesh_colors.len(),
+            args.meshes.len()
+        );
+    }
     let inputs: Vec<&Path> = args
         .meshes
         .iter()
