@@ -305,6 +305,33 @@ fn inspect_reports_json_keys() {
 }
 
 #[test]
+fn inspect_shows_small_sizes_and_refuses_a_bad_report_first() {
+    let dir = tempfile::tempdir().unwrap();
+    // A tetrahedron of 1 mm in metres: its volume of 1.7e-10 showed as 0.000000.
+    let tet = dir.path().join("tet.obj");
+    let obj =
+        "v 0 0 0\nv 0.001 0 0\nv 0 0.001 0\nv 0 0 0.001\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+    std::fs::write(&tet, obj).unwrap();
+    let o = run(&["inspect", tet.to_str().unwrap()]);
+    let out = text(&o).0;
+    assert!(out.contains("closed volumes: 1.66667e-10"), "{out}");
+    assert!(out.contains("(diagonal 0.001732)"), "{out}");
+    // An open mesh has a total volume of 0, not -0.
+    let tri = dir.path().join("tri.obj");
+    std::fs::write(&tri, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let json = text(&run(&["inspect", tri.to_str().unwrap(), "--json"])).0;
+    assert!(json.contains("\"total_volume\": 0.0"), "{json}");
+    // A report that is a folder: refused before the mesh (missing here) is read.
+    let (folder, nope) = (dir.path().join("r.json"), dir.path().join("nope.obj"));
+    std::fs::create_dir(&folder).unwrap();
+    let [nope, folder] = [&nope, &folder].map(|p| p.to_str().unwrap());
+    let o = run(&["inspect", nope, "--report", folder]);
+    let err = text(&o).1;
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("exists and is not a file"), "{err}");
+}
+
+#[test]
 fn results_do_not_depend_on_the_thread_count() {
     let dir = tempfile::tempdir().unwrap();
     let mut m = generate::icosphere(5);

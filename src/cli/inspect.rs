@@ -35,8 +35,21 @@ pub struct InspectReport {
     pub diagnosis: Diagnosis,
 }
 
+/// Six decimals, or six significant digits below 0.001 (a 1 mm cube in metres has a volume of
+/// 1e-9, which six decimals show as 0.000000).
+fn six(x: f64) -> String {
+    if x != 0.0 && x.abs() < 1e-3 {
+        format!("{x:.5e}")
+    } else {
+        format!("{x:.6}")
+    }
+}
+
 /// Runs `drapekit inspect`.
 pub fn run(args: InspectArgs) -> anyhow::Result<()> {
+    if let Some(r) = &args.report {
+        io::check_target(r, &[args.file.as_path()])?;
+    }
     let read = io::read_mesh(&args.file, &args.read.options())?;
     let d = diagnose(&read.mesh);
     let report = InspectReport {
@@ -59,8 +72,10 @@ pub fn run(args: InspectArgs) -> anyhow::Result<()> {
     );
     if let Some(b) = &d.bbox {
         println!(
-            "  bbox {:?} .. {:?} (diagonal {:.6})",
-            b.min, b.max, b.diagonal
+            "  bbox {:?} .. {:?} (diagonal {})",
+            b.min,
+            b.max,
+            six(b.diagonal)
         );
     }
     println!(
@@ -82,22 +97,17 @@ pub fn run(args: InspectArgs) -> anyhow::Result<()> {
         d.winding_consistent, d.outward, d.watertight, d.euler_characteristic
     );
     if !d.volumes.is_empty() {
-        let shown: Vec<String> = d
-            .volumes
-            .iter()
-            .take(8)
-            .map(|v| format!("{:.6}", v.volume))
-            .collect();
+        let shown: Vec<String> = d.volumes.iter().take(8).map(|v| six(v.volume)).collect();
         let more = if d.volumes.len() > 8 {
             format!(" ... ({} in all)", d.volumes.len())
         } else {
             String::new()
         };
         println!(
-            "  closed volumes: {}{} (total {:.6})",
+            "  closed volumes: {}{} (total {})",
             shown.join(", "),
             more,
-            d.total_volume
+            six(d.total_volume)
         );
     }
     println!("  shell state: {}", d.shell_state);

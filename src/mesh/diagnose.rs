@@ -157,7 +157,8 @@ pub fn diagnose_with(
     let non_orientable = plan.components.iter().filter(|c| !c.orientable).count();
     let (winding_consistent, outward) = winding(plan, applied, non_orientable);
     let volumes = closed_volumes(plan, applied);
-    let total_volume = volumes.iter().map(|v| v.volume).sum();
+    // From +0: an empty f64 sum is -0, written "-0.0" for a mesh with no closed volume.
+    let total_volume = volumes.iter().map(|v| v.volume).fold(0.0, |a, v| a + v);
     let non_manifold_edges = plan.non_manifold_edges;
     let closed_components = plan.components.iter().filter(|c| c.closed).count();
     let mut d = Diagnosis {
