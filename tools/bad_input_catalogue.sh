@@ -569,6 +569,75 @@ cp "$fixtures/scenes/sphere_r0.3.obj" .
 case_ "$M" "--units and --up without --to-units, --to-up" convert sphere_r0.3.obj -o y.obj --units mm --up y
 
 # ---------------------------------------------------------------------------------------------
+# render, inspect and fit: hostile flags, frames folders and outputs (tests/render.rs, fit.rs,
+# roundtrip.rs).
+O="Outputs stay where they belong"
+TRI='v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n'
+CUBE='v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\nf 1 3 2\nf 1 4 3\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\nf 2 3 7\nf 2 7 6\nf 3 4 8\nf 3 8 7\nf 4 1 5\nf 4 5 8\n'
+new
+case_ "$B" "render: --width 8193, refused before the (missing) mesh is read" render nope.obj -o o.png --width 8193
+new
+mkdir -p frames
+printf "$TRI" >frames/sq_0000010.obj
+printf "$TRI" >frames/sq_0000020.obj
+printf "$TRI" >frames/cape_0000020.obj
+printf "$CUBE" >frames/sq_0000030.obj
+check='test -e o.png && echo "o.png written" || echo "no o.png"'
+case_ "$R" "render: a frames folder of two runs (pieces and meshes differ between steps)" render frames -o o.png
+new
+mkdir -p frames
+printf "$TRI" >frames/a_01.obj
+printf "$TRI" >frames/a_1.obj
+case_ "$R" "render: a frames folder with one piece twice at a step" render frames -o o.png
+new
+mkdir -p frames
+case_ "$R" "render: a frames folder with no frame files" render frames -o o.png
+new
+printf 'v 0 0 0\nv 1e90 0 0\nv 0 1 0\nvt 0 0\nvt 1e-250 0\nvt 0 1\nf 1/1 2/2 3/3\n' >far.obj
+case_ "$R" "render: a strain beyond the range of numbers (1e90 over 1e-250)" render far.obj -o o.png --color strain
+new
+mkdir o.png
+case_ "$O" "render: the picture is an existing folder (refused before reading)" render nope.obj -o o.png
+new
+case_ "$O" "render: the picture in a folder that does not exist" render nope.obj -o no/such/o.png
+new
+printf "$TRI" >in.png
+check='cmp -s in.png <(printf "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n") && echo "input unchanged"'
+case_ "$O" "render: the picture is the input (an OBJ named .png, read with --from obj)" render in.png -o in.png --from obj
+new
+printf "$TRI" >tri.obj
+case_ "$M" "render: --fps 0.01 (a delay beyond APNG's 65.535 s)" render tri.obj -o o.png --fps 0.01
+new
+printf "$TRI" >tri.obj
+case_ "$M" "render: --mesh-colors with more colours than meshes" render tri.obj -o o.png --mesh-colors '#ff0000,#00ff00'
+new
+mkdir r.json
+case_ "$O" "inspect: --report an existing folder (refused before reading)" inspect nope.obj --report r.json
+new
+printf 'v 0 0 0\nv 0.001 0 0\nv 0 0.001 0\nv 0 0 0.001\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n' >tet.obj
+show="closed volumes"
+case_ "$M" "inspect: a 1 mm tetrahedron in metres (its volume, once 0.000000)" inspect tet.obj
+new
+check='test -e form.obj && echo "form.obj written" || echo "no form.obj"'
+case_ "$O" "fit: --report equal to the form" fit --measurements "$fixtures/measurements_size38.toml" -o form.obj --report form.obj
+new
+check='test -e form.obj -o -e form.png && echo "AN OUTPUT WRITTEN" || echo "nothing written"'
+case_ "$O" "fit: --report equal to the --preview picture" fit --measurements "$fixtures/measurements_size38.toml" -o form.obj --preview --report form.png
+new
+case_ "$M" "fit: every count out of range at once" fit --measurements "$fixtures/measurements_size38.toml" -o form.obj --nodes 0 --around 2 --along 1 --stride 0
+new
+case_ "$M" "fit: --levels 0 with measurements" fit --measurements "$fixtures/measurements_size38.toml" -o form.obj --levels 0
+new
+case_ "$M" "fit: an output extension fit does not write (the hint names --format)" fit --measurements "$fixtures/measurements_size38.toml" -o form.png
+new
+case_ "$M" "fit: --units with a measurement set (which gives its own)" fit --measurements "$fixtures/measurements_size38.toml" -o form.obj --units mm
+new
+case_ "$R" "fit: --units against a sections JSON that states others" fit --sections "$fixtures/torso_sections.json" -o form.obj --units mm
+new
+printf 'v 0 0 0\nv 1 1 1\nv 2 2 2\nf 1 2 3\n' >line.obj
+case_ "$R" "fit: a scan whose every face is degenerate" fit --from-mesh line.obj -o form.obj
+
+# ---------------------------------------------------------------------------------------------
 # Preparation never breaks a good mesh; measurements brought in (real data).
 if [[ -n $data ]]; then
     for b in mean_all mean_female mean_male makehuman_hm08_body_only_m; do
@@ -681,6 +750,14 @@ if [[ -n $data ]]; then
     mem "garment: dress_pencil on mean_all.obj, 0.2 s + 0.2 s" "$(numfmt --to=si --suffix=B "$(stat -c %s "$data/patterns/dress_pencil_specification.json")") pattern" \
         garment "$data/patterns/dress_pencil_specification.json" --body "$data/bodies/mean_all.obj" -o g --sew-max 0.2 --settle-max 0.2
 fi
+# An animation: 300 frames of the sphere drop, drawn at 1600 x 1200 px (each picture encoded
+# as it is drawn; holding them all took 1.8 GB).
+new
+sphere_scene 'max_steps = 40000=>max_steps = 3000'
+printf '\n[output]\nframes = 10\n' >>s.toml
+"$exe" drape s.toml -o out >/dev/null 2>&1 || true
+mem "render: 300 frames at 1600 x 1200 px" "$(find out/frames -name '*.obj' | wc -l) frames of 1681 vertices" \
+    render out/frames out/sphere_r0.3.obj -o anim.png --width 1600 --height 1200
 echo
 echo "## Peak memory"
 echo

@@ -339,10 +339,8 @@ fn values(
                     cloth.path.display()
                 )
             })?;
-            Some(
-                render::strain::vertex_strain(&cloth.mesh, rest)
-                    .with_context(|| format!("{}: strain", cloth.path.display()))?,
-            )
+            let strain = render::strain::vertex_strain(&cloth.mesh, rest);
+            Some(strain.map_err(|e| anyhow::anyhow!("{}: strain: {e}", cloth.path.display()))?)
         }
         Quantity::Distance | Quantity::Contact => {
             let body = body.expect("a body is checked for before");
