@@ -782,7 +782,10 @@ fn flags_and_outputs_are_refused_before_the_input_is_read_with_every_problem() {
         "/fixtures/measurements_size38.toml"
     );
     let units = ["--measurements", size38, "-o", &out, "--units", "mm"];
-    fit_refused(&units, &["key 'units': the file says cm, --units says mm"]);
+    fit_refused(
+        &units,
+        &["key 'units': the file's units are cm", "not --units mm"],
+    );
     fit_refused(
         &["--from-mesh", &nope, "-o", &out, "--from", "nan"],
         &["--from NaN"],
@@ -809,7 +812,16 @@ fn flags_and_outputs_are_refused_before_the_input_is_read_with_every_problem() {
         "--units",
         "mm",
     ];
-    fit_refused(&other, &["key 'units': the file says m, --units says mm"]);
+    fit_refused(
+        &other,
+        &["key 'units': the file's units are m", "not --units mm"],
+    );
+    // 10,001 sections: a fit's time grows as their square (5,000 took 36 s).
+    let many: Vec<(f64, Vec<(f64, f64)>)> =
+        (0..10_001).map(|k| (k as f64, circle(1.0, 3))).collect();
+    let json = sections_json(dir.path(), "many.json", "m", &many);
+    let many = ["--sections", json.to_str().unwrap(), "-o", &out];
+    fit_refused(&many, &["many.json: 10001 sections: at most 10000"]);
     // A scan whose every face is degenerate: 'the body mesh is empty', no file named.
     let line = p("line.obj");
     std::fs::write(&line, "v 0 0 0\nv 1 1 1\nv 2 2 2\nf 1 2 3\n").unwrap();

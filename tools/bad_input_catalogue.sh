@@ -634,6 +634,9 @@ case_ "$M" "fit: --units with a measurement set (which gives its own)" fit --mea
 new
 case_ "$R" "fit: --units against a sections JSON that states others" fit --sections "$fixtures/torso_sections.json" -o form.obj --units mm
 new
+python3 -c "print('height,x,y'); [print(f'{k},1,0\\n{k},0,1\\n{k},-1,0') for k in range(10001)]" >many.csv
+case_ "$B" "fit: a sections file of 10,001 sections (the fit's time grows as their square)" fit --sections many.csv -o form.obj
+new
 printf 'v 0 0 0\nv 1 1 1\nv 2 2 2\nf 1 2 3\n' >line.obj
 case_ "$R" "fit: a scan whose every face is degenerate" fit --from-mesh line.obj -o form.obj
 

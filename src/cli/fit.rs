@@ -170,7 +170,9 @@ fn units_agree(p: &Path, file: Option<Units>, flag: Option<Units>) -> Result<(),
         Some((file, flag)) if file != flag => Err(FitError::Key {
             path: p.to_path_buf(),
             key: "units".into(),
-            message: format!("the file says {file}, --units says {flag}: give one"),
+            message: format!(
+                "the file's units are {file} (its key 'units' or its format's default), not --units {flag}: --units applies to CSV sections and meshes"
+            ),
         }),
         _ => Ok(()),
     }

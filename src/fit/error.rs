@@ -45,6 +45,10 @@ pub enum FitError {
     /// Too few sections for a surface.
     #[error("{found} section(s): a surface needs at least 3 at different heights")]
     TooFewSections { found: usize },
+    /// More sections than a fit takes: its time grows as their square (5,000 took 36 s,
+    /// 100,000 would take hours).
+    #[error("{found} sections: at most {limit} (a fit's time grows as the square of their number); give fewer")]
+    TooManySections { found: usize, limit: usize },
     /// A section with too few distinct points.
     #[error("section {section} (height {h}): {found} distinct point(s); a section needs at least 3", h = crate::math::short(*height))]
     TooFewPoints {
@@ -149,6 +153,7 @@ impl FitError {
     pub fn in_file(self, path: &Path) -> FitError {
         match self {
             FitError::TooFewSections { .. }
+            | FitError::TooManySections { .. }
             | FitError::TooFewPoints { .. }
             | FitError::Degenerate { .. }
             | FitError::DuplicateHeight { .. }

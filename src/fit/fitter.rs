@@ -411,13 +411,20 @@ struct Plan {
 
 /// The plan for `sections` (normalized) under `opts`: the nodes, stride and order given, or
 /// chosen for the tolerance; refused when the stride does not divide the sections, fewer
-/// than 3 are kept, or the node points or the form's vertices would be too many.
+/// than 3 are kept, more than [`MAX_LEVELS`] are given, or the node points or the form's
+/// vertices would be too many.
 fn plan(
     sections: &[Section],
     opts: &FitOptions,
     warnings: &mut Vec<String>,
 ) -> Result<Plan, FitError> {
     let k_all = sections.len();
+    if k_all > MAX_LEVELS {
+        return Err(FitError::TooManySections {
+            found: k_all,
+            limit: MAX_LEVELS,
+        });
+    }
     let (n, stride, m_req, choice) = match opts.tolerance {
         None => (opts.nodes_around, opts.stride, opts.lanczos, None),
         Some(tol) => choose(sections, tol, warnings),
