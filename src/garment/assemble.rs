@@ -324,9 +324,10 @@ fn inner_neighbour(
 
 /// The model particle (piece particles numbered from `first`) of each outline sample. `build`
 /// keeps every sample as an outline particle at exactly its position (it only adds points on
-/// segments longer than the spacing).
+/// segments longer than the spacing), though a coordinate of -0 may come back as +0 (`a + 0 (b
+/// - a)`): the key adds 0 to each, which makes -0 +0 and leaves every other value as it is.
 fn sample_particles(piece: &Piece, outline: &[Point2], first: u32) -> Vec<u32> {
-    let key = |q: &Point2| (q.x.to_bits(), q.y.to_bits());
+    let key = |q: &Point2| ((q.x + 0.0).to_bits(), (q.y + 0.0).to_bits());
     let at: HashMap<(u64, u64), u32> = piece
         .flat
         .iter()
