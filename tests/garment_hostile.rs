@@ -4,13 +4,21 @@
 mod common;
 
 use drapekit::garment::assemble::{assemble, AssembleOptions};
-use drapekit::garment::parse;
+use drapekit::garment::{parse, Problem, SpecError};
 use std::path::Path;
 
 /// The tube fixture's text.
 fn tube() -> String {
     let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/garments/tube_specification.json");
     std::fs::read_to_string(p).unwrap()
+}
+
+/// The problems the reader finds in `text` (it must refuse it).
+fn problems(text: &str) -> Vec<Problem> {
+    match parse(text, Path::new("p.json")) {
+        Err(SpecError::Invalid { problems, .. }) => problems,
+        other => panic!("expected an invalid pattern, got {other:?}"),
+    }
 }
 
 #[test]
@@ -28,4 +36,45 @@ fn a_vertex_at_minus_zero_is_sewn_like_one_at_zero() {
     let plain = assemble(&parse(&tube(), Path::new("p.json")).unwrap(), &opts).unwrap();
     assert_eq!(a.seams, plain.seams);
     assert_eq!(a.edge_particles, plain.edge_particles);
+}
+
+/// A pattern of one panel, a regular `n`-gon of radius 40 cm, with vertices `swap` swapped
+/// (a crossing) when given.
+fn ngon_pattern(n: usize, swap: Option<(usize, usize)>) -> String {
+    let mut v: Vec<[f64; 2]> = (0..n)
+        .map(|i| {
+            let a = std::f64::consts::TAU * i as f64 / n as f64;
+            [40.0 * a.cos(), 40.0 * a.sin()]
+        })
+        .collect();
+    if let Some((a, b)) = swap {
+        v.swap(a, b);
+    }
+    let edges: Vec<String> = (0..n)
+        .map(|i| format!(r#"{{"endpoints": [{i}, {}]}}"#, (i + 1) % n))
+        .collect();
+    format!(
+        r#"{{"pattern": {{"panels": {{"front": {{"vertices": {}, "edges": [{}],
+        "translation": [0, 120, 30], "rotation": [0, 0, 0]}}}}, "stitches": []}},
+        "properties": {{"curvature_coords": "relative", "units_in_meter": 100}}}}"#,
+        serde_json::to_string(&v).unwrap(),
+        edges.join(", ")
+    )
+}
+
+#[test]
+fn a_panel_of_300000_vertices_is_checked_for_crossings_in_seconds() {
+    // Every pair of the outline's segments was tested: 4.5e10 tests, minutes of a hang (a
+    // 1e6-vertex panel: hours). The sweep answers in O(n log n).
+    let start = std::time::Instant::now();
+    let n = 300_000;
+    assert!(parse(&ngon_pattern(n, None), Path::new("p.json")).is_ok());
+    let p = problems(&ngon_pattern(n, Some((1000, 1001))));
+    assert!(
+        matches!(&p[..], [Problem::SelfCrossing { panel, edge_a, edge_b }]
+            if panel == "front" && *edge_a >= 999 && *edge_b <= 1001),
+        "{p:?}"
+    );
+    let t = start.elapsed().as_secs_f64();
+    assert!(t < 30.0, "{t} s");
 }

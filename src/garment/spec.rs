@@ -21,6 +21,10 @@ use std::path::{Path, PathBuf};
 /// Segments per curved edge of the polyline the self-crossing test uses.
 const CROSSING_SEGMENTS: usize = 32;
 
+/// The longest outline (segments) whose every pair of segments is tested for a crossing, so
+/// that each pair of edges crossing is named; beyond it the sweep names one pair.
+const PAIRWISE_SEGMENTS: usize = 4096;
+
 /// A whole sewing pattern: panels in a fixed order and the stitches between their edges.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Pattern {
@@ -790,11 +794,55 @@ fn check_arcs(panel: &Panel, problems: &mut Vec<Problem>) {
     }
 }
 
+/// Finds the outline's crossings: first by the O(n log n) sweep (`geom::crossing`), which
+/// finds one pair of segments that cross or touch, or says there is none; then, when it found
+/// one in an outline of at most [`PAIRWISE_SEGMENTS`] segments, by testing every pair (each
+/// pair of edges that properly crosses named once). A longer outline is named by the sweep's
+/// pair alone: testing every pair of a 1e6-vertex panel would not end.
+fn check_self_crossing(panel: &Panel, problems: &mut Vec<Problem>) {
+    let (points, owner) = panel.crossing_polyline();
+    let Some((i, j)) = sweep_crossing(&points, &owner) else {
+        return;
+    };
+    if points.len() <= PAIRWISE_SEGMENTS {
+        pairwise_crossings(panel, &points, &owner, problems);
+    } else {
+        problems.push(Problem::SelfCrossing {
+            panel: panel.name.clone(),
+            edge_a: i.min(j),
+            edge_b: i.max(j),
+        });
+    }
+}
+
+/// The edges of a pair of segments of the closed outline `points` that cross or touch, found
+/// by the sweep after consecutive repeated points are dropped (`owner`: each segment's edge).
+fn sweep_crossing(points: &[Point2], owner: &[usize]) -> Option<(usize, usize)> {
+    let mut kept: Vec<(Point2, usize)> = Vec::with_capacity(points.len());
+    for (p, &o) in points.iter().zip(owner) {
+        if kept.last().is_none_or(|q| q.0 != *p) {
+            kept.push((*p, o));
+        }
+    }
+    while kept.len() > 1 && kept.first().map(|q| q.0) == kept.last().map(|q| q.0) {
+        kept.pop();
+    }
+    if kept.len() < 3 {
+        return Some((0, 0));
+    }
+    let unique: Vec<Point2> = kept.iter().map(|q| q.0).collect();
+    crate::geom::crossing::self_crossing(&unique).map(|(a, b)| (kept[a].1, kept[b].1))
+}
+
 /// Tests every pair of segments of the sampled closed outline for a proper crossing (each
 /// segment's ends strictly on opposite sides of the other's line); reports each pair of
 /// edges once.
-fn check_self_crossing(panel: &Panel, problems: &mut Vec<Problem>) {
-    let (points, owner) = panel.crossing_polyline();
+fn pairwise_crossings(
+    panel: &Panel,
+    points: &[Point2],
+    owner: &[usize],
+    problems: &mut Vec<Problem>,
+) {
     let n = points.len();
     let mut seen = Vec::new();
     for i in 0..n {
