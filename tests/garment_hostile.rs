@@ -78,3 +78,32 @@ fn a_panel_of_300000_vertices_is_checked_for_crossings_in_seconds() {
     let t = start.elapsed().as_secs_f64();
     assert!(t < 30.0, "{t} s");
 }
+
+#[test]
+fn ten_thousand_panels_are_refused_by_their_particles_together_before_any_is_built() {
+    // Each 60 x 40 cm panel is about 200 particles at 4 cm, well within a piece's limit; all
+    // 10,000 were built (2 million particles) and the solver's allocation of 8 GB aborted.
+    let panel = r#"{"vertices": [[-30, 0], [30, 0], [30, 40], [-30, 40]],
+        "edges": [{"endpoints": [0, 1]}, {"endpoints": [1, 2]}, {"endpoints": [2, 3]}, {"endpoints": [3, 0]}],
+        "translation": [0, 80, 30], "rotation": [0, 0, 0]}"#;
+    let panels: Vec<String> = (0..10_000).map(|i| format!("\"p{i}\": {panel}")).collect();
+    let text = format!(
+        r#"{{"pattern": {{"panels": {{{}}}, "stitches": []}},
+        "properties": {{"curvature_coords": "relative", "units_in_meter": 100}}}}"#,
+        panels.join(", ")
+    );
+    let pattern = parse(&text, Path::new("p.json")).unwrap();
+    let opts = AssembleOptions {
+        spacing: 0.04,
+        ..AssembleOptions::default()
+    };
+    let start = std::time::Instant::now();
+    let errors = assemble(&pattern, &opts).expect_err("refused");
+    assert!(start.elapsed().as_secs_f64() < 10.0);
+    let message = errors[0].to_string();
+    assert!(
+        message.starts_with("the pattern's 10000 panel(s) give about ")
+            && message.contains("a garment has at most 1000000"),
+        "{message}"
+    );
+}

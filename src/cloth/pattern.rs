@@ -570,6 +570,19 @@ pub fn build(
     build_with_holes(outline, &[], spacing, fabric, pins)
 }
 
+/// The particles an outline gives at `spacing` (its area over `spacing^2` plus its perimeter
+/// over `spacing`, holes not subtracted), and twice its area over `spacing^2`.
+pub fn particle_estimate(outline: &[Point2], spacing: f64) -> (f64, f64) {
+    let n = outline.len();
+    let (mut twice_area, mut perimeter) = (0.0, 0.0);
+    for i in 0..n {
+        let (a, b) = (outline[i] / spacing, outline[(i + 1) % n] / spacing);
+        twice_area += a.x * b.y - a.y * b.x;
+        perimeter += (b - a).norm();
+    }
+    (0.5 * twice_area.abs() + perimeter, twice_area)
+}
+
 /// Refuses a spacing that is not a positive number, an outline reaching beyond
 /// [`MAX_REACH`], or a spacing that would give more than [`MAX_PARTICLES`] particles: the
 /// outline's area over `spacing^2` plus its perimeter over `spacing` (holes not subtracted),
@@ -586,14 +599,7 @@ pub fn check_particle_count(outline: &[Point2], spacing: f64) -> Result<(), Patt
         let limit = MAX_REACH;
         return Err(PatternError::TooFar { reach, limit });
     }
-    let n = outline.len();
-    let (mut twice_area, mut perimeter) = (0.0, 0.0);
-    for i in 0..n {
-        let (a, b) = (outline[i] / spacing, outline[(i + 1) % n] / spacing);
-        twice_area += a.x * b.y - a.y * b.x;
-        perimeter += (b - a).norm();
-    }
-    let estimate = 0.5 * twice_area.abs() + perimeter;
+    let (estimate, twice_area) = particle_estimate(outline, spacing);
     // A non-finite outline passes: the outline's own check names it.
     let finite = outline.iter().all(|p| p.x.is_finite() && p.y.is_finite());
     if finite && (estimate.is_nan() || estimate > MAX_PARTICLES as f64) {

@@ -143,6 +143,33 @@ pub enum AssembleError {
     /// The spacing is not a positive length.
     #[error("spacing {spacing} m must be a positive number")]
     Spacing { spacing: f64 },
+    /// The panels together would give more than [`pattern::MAX_PARTICLES`] particles (each
+    /// panel's estimate, and at least its outline's samples, summed before any is built).
+    #[error("the pattern's {panels} panel(s) give about {estimate} particles at spacing {spacing} m; a garment has at most {limit}: use a larger spacing, or fewer or smaller panels")]
+    TooManyParticles {
+        panels: usize,
+        estimate: f64,
+        spacing: f64,
+        limit: usize,
+    },
+}
+
+/// Refuses panels that together would give more than [`pattern::MAX_PARTICLES`] particles:
+/// each panel alone is checked as it is built, but ten thousand panels of a few hundred
+/// particles each would all be built, and their solver would not fit in memory.
+fn check_total(outlines: &[Vec<Point2>], h: f64) -> Result<(), AssembleError> {
+    let estimate: f64 = (outlines.iter())
+        .map(|o| pattern::particle_estimate(o, h).0.max(o.len() as f64))
+        .sum();
+    if estimate > pattern::MAX_PARTICLES as f64 {
+        return Err(AssembleError::TooManyParticles {
+            panels: outlines.len(),
+            estimate: estimate.round(),
+            spacing: h,
+            limit: pattern::MAX_PARTICLES,
+        });
+    }
+    Ok(())
 }
 
 /// The pattern's units per metre, its y-up frame, a panel's placement and the whole
@@ -173,14 +200,18 @@ pub fn assemble(
     let to_m = 1.0 / pattern.units_in_meter;
     let counts = edge_segments(pattern, h / to_m);
     let sampled = sample_all(pattern, &counts);
+    let outlines: Vec<Vec<Point2>> = (sampled.iter())
+        .map(|s| {
+            s.points
+                .iter()
+                .map(|q| Point2::from(q.coords * to_m))
+                .collect()
+        })
+        .collect();
+    check_total(&outlines, h).map_err(|e| vec![e])?;
     let (mut pieces, mut errors, mut outline_particle) = (Vec::new(), Vec::new(), Vec::new());
     let mut first = 0u32;
-    for (k, (panel, s)) in pattern.panels.iter().zip(&sampled).enumerate() {
-        let outline: Vec<Point2> = s
-            .points
-            .iter()
-            .map(|q| Point2::from(q.coords * to_m))
-            .collect();
+    for (k, (panel, outline)) in pattern.panels.iter().zip(outlines).enumerate() {
         match pattern::build(&outline, h, &opts.fabric, &Pins::default()) {
             Ok(mut piece) => {
                 if opts.rim_bending {
