@@ -140,3 +140,19 @@ fn an_arc_of_a_radius_far_beyond_its_chord_is_the_nearly_straight_edge_it_says()
     assert!((half.point(&s, &e, 0.5) - Point2::new(50.0, 20.0)).norm() < 1e-12);
     assert!((half.point(&s, &e, 1.0) - e).norm() < 1e-12);
 }
+
+#[test]
+fn a_far_vertex_no_edge_uses_is_named_as_far_not_every_edge_as_zero_length() {
+    // The zero-length test measured edges against the farthest vertex, used or not: one at
+    // 1e300 made each of the four edges "zero length" and hid the vertex.
+    let text = tube().replacen("[-30, 40]]", "[-30, 40], [1e300, 1e300]]", 1);
+    let p = problems(&text);
+    assert!(
+        !p.iter().any(|p| matches!(p, Problem::ZeroLength { .. })),
+        "{p:?}"
+    );
+    assert!(
+        matches!(&p[..], [Problem::PanelSize { panel, .. }] if panel == "front"),
+        "{p:?}"
+    );
+}

@@ -758,12 +758,11 @@ fn check_loop(name: &str, edges: &[Edge], problems: &mut Vec<Problem>) {
     }
 }
 
-/// Edges whose ends coincide (relative to the panel's size): a point, not a seam line.
+/// Edges whose ends coincide (relative to the size of the outline's vertices; a vertex no
+/// edge uses, however far, does not make every edge a point): a point, not a seam line.
 fn check_lengths(panel: &Panel, problems: &mut Vec<Problem>) {
-    let scale = panel
-        .vertices
-        .iter()
-        .map(|v| v.coords.norm())
+    let scale = (panel.edges.iter())
+        .map(|e| panel.vertices[e.start].coords.norm())
         .fold(0.0, f64::max)
         .max(f64::MIN_POSITIVE);
     for (k, edge) in panel.edges.iter().enumerate() {
