@@ -156,3 +156,28 @@ fn a_far_vertex_no_edge_uses_is_named_as_far_not_every_edge_as_zero_length() {
         "{p:?}"
     );
 }
+
+#[test]
+fn a_loop_that_goes_round_twice_is_refused_by_the_reader() {
+    // Eight edges twice round the square: no edge ends where the next does not start, and
+    // no segment properly crosses another, so the reader let it through and the cloth
+    // refused it as an outline crossing itself, without the file's name.
+    let edges = r#"[{"endpoints": [0, 1]}, {"endpoints": [1, 2]}, {"endpoints": [2, 3]}, {"endpoints": [3, 0]}]"#;
+    let twice = r#"[{"endpoints": [0, 1]}, {"endpoints": [1, 2]}, {"endpoints": [2, 3]}, {"endpoints": [3, 0]}, {"endpoints": [0, 1]}, {"endpoints": [1, 2]}, {"endpoints": [2, 3]}, {"endpoints": [3, 0]}]"#;
+    let text = tube().replacen(edges, twice, 1);
+    assert_ne!(text, tube());
+    let p = problems(&text);
+    assert_eq!(p.len(), 4, "{p:?}");
+    assert_eq!(
+        p[0],
+        Problem::VertexTwice {
+            panel: "front".into(),
+            vertex: 0,
+            first: 0,
+            second: 4
+        }
+    );
+    assert!(p[0]
+        .to_string()
+        .contains("edges 0 and 4 both start at vertex 0"));
+}

@@ -148,6 +148,13 @@ pub enum Problem {
         next: usize,
         next_start: usize,
     },
+    /// Edges `first` and `second` both start at `vertex`: the loop passes it twice.
+    VertexTwice {
+        panel: String,
+        vertex: usize,
+        first: usize,
+        second: usize,
+    },
     /// An unknown `curvature.type`.
     UnknownCurvature {
         panel: String,
@@ -251,6 +258,15 @@ impl fmt::Display for Problem {
             } => write!(
                 f,
                 "panel '{panel}': edge {edge} ends at vertex {end} but the next edge {next} starts at vertex {next_start}; the edges must form one closed loop in order"
+            ),
+            VertexTwice {
+                panel,
+                vertex,
+                first,
+                second,
+            } => write!(
+                f,
+                "panel '{panel}': edges {first} and {second} both start at vertex {vertex}; the edges must go once round the outline, each vertex starting one edge"
             ),
             UnknownCurvature { panel, edge, kind } => {
                 write!(f, "panel '{panel}' edge {edge}: unknown curvature type '{kind}'")
@@ -754,6 +770,25 @@ fn check_loop(name: &str, edges: &[Edge], problems: &mut Vec<Problem>) {
                 next,
                 next_start: edges[next].start,
             });
+        }
+    }
+    check_once_round(name, edges, problems);
+}
+
+/// Edges that start at a vertex an earlier edge starts at: the loop passes it twice (goes
+/// round the outline twice, or pinches into a figure of eight).
+fn check_once_round(name: &str, edges: &[Edge], problems: &mut Vec<Problem>) {
+    let mut first_from: HashMap<usize, usize> = HashMap::new();
+    for (k, e) in edges.iter().enumerate() {
+        if let Some(&first) = first_from.get(&e.start) {
+            problems.push(Problem::VertexTwice {
+                panel: name.into(),
+                vertex: e.start,
+                first,
+                second: k,
+            });
+        } else {
+            first_from.insert(e.start, k);
         }
     }
 }
