@@ -181,3 +181,26 @@ fn a_loop_that_goes_round_twice_is_refused_by_the_reader() {
         .to_string()
         .contains("edges 0 and 4 both start at vertex 0"));
 }
+
+#[test]
+fn a_panel_with_no_area_is_refused_by_the_reader() {
+    // Four vertices on a line: the reader saw no proper crossing and passed it, and the cloth
+    // refused it as an outline crossing itself; 1e-6 cm tall, it reached the solver, which
+    // failed with a matrix "not positive definite".
+    for vertices in [
+        "[[0, 0], [10, 0], [20, 0], [30, 0]]",
+        "[[-30, 0], [30, 0], [30, 1e-6], [-30, 1e-6]]",
+    ] {
+        let text = tube().replacen("[[-30, 0], [30, 0], [30, 40], [-30, 40]]", vertices, 1);
+        let p = problems(&text);
+        assert!(
+            matches!(&p[..], [Problem::NoArea { panel, square_metres }]
+                if panel == "front" && *square_metres < 1e-6),
+            "{vertices}: {p:?}"
+        );
+    }
+    // Half a millimetre by 60 cm is cloth.
+    let thin = "[[-30, 0], [30, 0], [30, 0.05], [-30, 0.05]]";
+    let text = tube().replacen("[[-30, 0], [30, 0], [30, 40], [-30, 40]]", thin, 1);
+    assert!(parse(&text, Path::new("p.json")).is_ok());
+}

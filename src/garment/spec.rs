@@ -211,6 +211,8 @@ pub enum Problem {
     /// A panel's size (the larger of its vertices' box diagonal and its longest edge, curves
     /// included), in metres, outside [`PANEL_SIZE`].
     PanelSize { panel: String, metres: f64 },
+    /// A panel whose outline encloses less than [`PANEL_AREA_MIN`], m^2.
+    NoArea { panel: String, square_metres: f64 },
     /// A panel placed (its translation, or a vertex) farther than [`PANEL_REACH`] from the
     /// pattern's origin, in metres.
     PanelFar {
@@ -224,6 +226,9 @@ pub enum Problem {
 /// the units or the coordinates are wrong (a pattern in metres read as centimetres is 100
 /// times too small, not this), and sampling its outline would not fit in memory.
 pub const PANEL_SIZE: [f64; 2] = [1e-3, 100.0];
+
+/// The least area a garment panel encloses, m^2: 1 mm^2, the square of the least size.
+pub const PANEL_AREA_MIN: f64 = PANEL_SIZE[0] * PANEL_SIZE[0];
 
 /// How far from the pattern's origin a panel's translation or vertex may be, m. A garment
 /// is placed round a body at the origin; a panel a kilometre away is a wrong translation,
@@ -313,6 +318,11 @@ impl fmt::Display for Problem {
                 crate::math::short(*metres),
                 PANEL_SIZE[0],
                 PANEL_SIZE[1]
+            ),
+            NoArea { panel, square_metres } => write!(
+                f,
+                "panel '{panel}' encloses {} m^2 (its outline's area, in metres by units_in_meter); a garment panel encloses at least {PANEL_AREA_MIN} m^2: are its vertices on a line?",
+                crate::math::short(*square_metres)
             ),
             PanelFar { panel, what, metres } => write!(
                 f,
@@ -536,7 +546,23 @@ fn build_panel(
     if problems.len() == before {
         check_self_crossing(&panel, problems);
     }
+    if problems.len() == before && units.is_finite() && units > 0.0 {
+        check_area(&panel, units, problems);
+    }
     panel
+}
+
+/// A panel whose outline encloses less than [`PANEL_AREA_MIN`]: its vertices (nearly) on a
+/// line, a sliver no cloth can be made of (the solver's smallest triangles would be too light
+/// for its stiffest springs).
+fn check_area(panel: &Panel, units: f64, problems: &mut Vec<Problem>) {
+    let square_metres = (panel.signed_area() / units / units).abs();
+    if square_metres.is_nan() || square_metres < PANEL_AREA_MIN {
+        problems.push(Problem::NoArea {
+            panel: panel.name.clone(),
+            square_metres,
+        });
+    }
 }
 
 /// A panel whose size in metres is outside [`PANEL_SIZE`] (before anything samples it).
