@@ -204,3 +204,21 @@ fn a_panel_with_no_area_is_refused_by_the_reader() {
     let text = tube().replacen("[[-30, 0], [30, 0], [30, 40], [-30, 40]]", thin, 1);
     assert!(parse(&text, Path::new("p.json")).is_ok());
 }
+
+#[test]
+fn a_panel_name_given_twice_is_refused_not_dropped() {
+    // JSON keeps the last of two keys: the first "front" was dropped without a word (here the
+    // stitches to "back" then named a panel that "does not exist"; without stitches a panel
+    // was silently lost).
+    let text = tube().replacen("\"back\":", "\"front\":", 1);
+    match parse(&text, Path::new("p.json")) {
+        Err(SpecError::Shape { message, line, .. }) => {
+            assert!(
+                message.contains("panel 'front' is given twice in pattern.panels"),
+                "{message}"
+            );
+            assert_eq!(line, 5);
+        }
+        other => panic!("{other:?}"),
+    }
+}

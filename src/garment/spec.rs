@@ -344,6 +344,7 @@ struct RawSpec {
 
 #[derive(Deserialize)]
 struct RawPattern {
+    #[serde(deserialize_with = "unique_panels")]
     panels: BTreeMap<String, RawPanel>,
     #[serde(default)]
     stitches: Vec<Vec<RawStitchPart>>,
@@ -391,6 +392,36 @@ struct RawEdge {
 enum RawStitchPart {
     End { panel: String, edge: usize },
     Flag(String),
+}
+
+/// `pattern.panels`, refusing a name given twice (a JSON object would keep the last panel of
+/// that name and silently drop the others).
+fn unique_panels<'de, D: serde::Deserializer<'de>>(
+    d: D,
+) -> Result<BTreeMap<String, RawPanel>, D::Error> {
+    struct Panels;
+    impl<'de> serde::de::Visitor<'de> for Panels {
+        type Value = BTreeMap<String, RawPanel>;
+        fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+            f.write_str("an object of panels by name")
+        }
+        fn visit_map<A: serde::de::MapAccess<'de>>(
+            self,
+            mut map: A,
+        ) -> Result<Self::Value, A::Error> {
+            let mut out = BTreeMap::new();
+            while let Some(name) = map.next_key::<String>()? {
+                if out.contains_key(&name) {
+                    let m = format!("panel '{name}' is given twice in pattern.panels; each panel needs a name of its own");
+                    return Err(serde::de::Error::custom(m));
+                }
+                let panel = map.next_value()?;
+                out.insert(name, panel);
+            }
+            Ok(out)
+        }
+    }
+    d.deserialize_map(Panels)
 }
 
 /// A curvature as written: control points still in the file's coordinates.
