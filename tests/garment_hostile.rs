@@ -222,3 +222,17 @@ fn a_panel_name_given_twice_is_refused_not_dropped() {
         other => panic!("{other:?}"),
     }
 }
+
+#[test]
+fn a_panel_name_with_a_line_break_is_refused() {
+    // "back\nv 1 2 3" was written into the garment's OBJ as a group line and a vertex line.
+    let text = tube().replace("\"back\"", "\"back\\nv 1 2 3\"");
+    let p = problems(&text);
+    assert_eq!(
+        p,
+        vec![Problem::ControlInName {
+            panel: "back\nv 1 2 3".into()
+        }]
+    );
+    assert!(p[0].to_string().contains("control character"));
+}

@@ -129,6 +129,9 @@ pub enum Problem {
     UnknownCurvatureCoords { value: String },
     /// `panel_order` names a panel that does not exist.
     UnknownPanelInOrder { name: String },
+    /// A panel's name holds a control character (a line break would split the line that
+    /// names its group in the garment's OBJ, and what follows it would be read as data).
+    ControlInName { panel: String },
     /// A number of a panel is NaN or infinite.
     NonFinite { panel: String, what: String },
     /// Fewer than 3 edges.
@@ -244,6 +247,10 @@ impl fmt::Display for Problem {
                 write!(f, "properties.curvature_coords is '{value}'; expected 'relative' or 'absolute'")
             }
             UnknownPanelInOrder { name } => write!(f, "panel_order names panel '{name}', which does not exist"),
+            ControlInName { panel } => write!(
+                f,
+                "panel {panel:?}: its name holds a control character (a line break, a tab, a NUL); the garment's OBJ names each panel's group on one line"
+            ),
             NonFinite { panel, what } => write!(f, "panel '{panel}': {what} is not a finite number"),
             TooFewEdges { panel, count } => {
                 write!(f, "panel '{panel}' has {count} edge(s); a panel needs at least 3")
@@ -495,6 +502,11 @@ fn build(raw: RawSpec, problems: &mut Vec<Problem>) -> Pattern {
         }
     };
     let order = panel_order(&raw.pattern, problems);
+    for name in order.iter().filter(|n| n.chars().any(char::is_control)) {
+        problems.push(Problem::ControlInName {
+            panel: name.clone(),
+        });
+    }
     let mut by_name = raw.pattern.panels;
     let panels: Vec<Panel> = order
         .iter()
