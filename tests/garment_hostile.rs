@@ -236,3 +236,27 @@ fn a_panel_name_with_a_line_break_is_refused() {
     );
     assert!(p[0].to_string().contains("control character"));
 }
+
+#[test]
+fn a_stitch_element_of_the_wrong_shape_says_what_a_stitch_element_is() {
+    // A negative edge index said "data did not match any variant of untagged enum
+    // RawStitchPart".
+    for (bad, shown) in [
+        (
+            r#"{"panel": "back", "edge": -1}"#,
+            r#"{"edge":-1,"panel":"back"}"#,
+        ),
+        (r#"{"panel": "back"}"#, r#"{"panel":"back"}"#),
+        ("5", "not 5"),
+    ] {
+        let text = tube().replacen(r#"{"panel": "back", "edge": 3}"#, bad, 1);
+        match parse(&text, Path::new("p.json")) {
+            Err(SpecError::Shape { message, .. }) => assert!(
+                message.starts_with(r#"a stitch element is {"panel": NAME, "edge": INDEX}"#)
+                    && message.contains(shown),
+                "{bad}: {message}"
+            ),
+            other => panic!("{bad}: {other:?}"),
+        }
+    }
+}

@@ -394,8 +394,6 @@ struct RawEdge {
     label: Option<String>,
 }
 
-#[derive(Deserialize)]
-#[serde(untagged)]
 enum RawStitchPart {
     End { panel: String, edge: usize },
     Flag(String),
@@ -429,6 +427,34 @@ fn unique_panels<'de, D: serde::Deserializer<'de>>(
         }
     }
     d.deserialize_map(Panels)
+}
+
+/// A stitch element: `{"panel": NAME, "edge": INDEX}` or a flag such as `"right_wrong"`, with
+/// an error that says so (not serde's "did not match any variant").
+impl<'de> Deserialize<'de> for RawStitchPart {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let v = Value::deserialize(d)?;
+        if let Some(flag) = v.as_str() {
+            return Ok(RawStitchPart::Flag(flag.into()));
+        }
+        let panel = v.get("panel").and_then(Value::as_str);
+        let edge = (v.get("edge").and_then(Value::as_u64)).and_then(|e| usize::try_from(e).ok());
+        match (panel, edge) {
+            (Some(panel), Some(edge)) => Ok(RawStitchPart::End {
+                panel: panel.into(),
+                edge,
+            }),
+            _ => {
+                let mut text = v.to_string();
+                if text.chars().count() > 60 {
+                    text = text.chars().take(57).chain("...".chars()).collect();
+                }
+                Err(serde::de::Error::custom(format!(
+                    "a stitch element is {{\"panel\": NAME, \"edge\": INDEX}} (an edge index from 0) or \"right_wrong\", not {text}"
+                )))
+            }
+        }
+    }
 }
 
 /// A curvature as written: control points still in the file's coordinates.
