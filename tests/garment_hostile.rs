@@ -260,3 +260,35 @@ fn a_stitch_element_of_the_wrong_shape_says_what_a_stitch_element_is() {
         }
     }
 }
+
+/// `garment` on `pattern` into `out` with `--report report` and a body that does not exist:
+/// whether it succeeded, and its stderr.
+fn garment_with_report(pattern: &str, out: &str, report: &str) -> (bool, String) {
+    let body = "no_such_body.obj";
+    let run = common::run(&[
+        "garment", pattern, "--body", body, "-o", out, "--report", report,
+    ]);
+    (run.status.success(), common::text(&run).1)
+}
+
+#[test]
+fn a_report_over_the_pattern_is_refused_before_any_work() {
+    // --report naming the pattern was refused only when the report was written, after the
+    // whole run, with the garment already in the output folder ("out was written, the
+    // report was not").
+    let dir = tempfile::tempdir().unwrap();
+    let pattern = dir.path().join("p.json");
+    std::fs::write(&pattern, tube()).unwrap();
+    let out = dir.path().join("out");
+    let (p, o) = (pattern.to_str().unwrap(), out.to_str().unwrap());
+    let (ok, stderr) = garment_with_report(p, o, p);
+    assert!(!ok);
+    assert!(
+        stderr.starts_with("error: refusing to write") && stderr.contains("it is the input file"),
+        "{stderr}"
+    );
+    assert!(!out.exists());
+    assert_eq!(std::fs::read_to_string(&pattern).unwrap(), tube());
+    let (ok, stderr) = garment_with_report(p, o, o);
+    assert!(!ok && stderr.contains("over the output folder"), "{stderr}");
+}

@@ -675,6 +675,7 @@ pub(super) fn judge(g: &gd::Garment) -> Judged {
 pub fn run(args: GarmentArgs) -> anyhow::Result<()> {
     let start = std::time::Instant::now();
     let settings = settings(&args)?;
+    check_report(&args)?;
     let pattern = crate::garment::read(&args.pattern)?;
     if args.panels {
         check_panel_names(&pattern, &args.pattern)?;
@@ -716,6 +717,23 @@ pub fn run(args: GarmentArgs) -> anyhow::Result<()> {
         args.json,
         print_summary,
     )
+}
+
+/// Refuses, before any work, a `--report` that is an input, the output folder, a folder or in
+/// a missing folder (each was refused only after the whole run: the garment written, the
+/// report not).
+fn check_report(args: &GarmentArgs) -> anyhow::Result<()> {
+    let Some(r) = &args.report else {
+        return Ok(());
+    };
+    if crate::io::same_target(r, &args.output) {
+        bail!(
+            "--report {}: the report would be written over the output folder",
+            r.display()
+        );
+    }
+    crate::io::check_target(r, &[&args.pattern, &args.body])?;
+    Ok(())
 }
 
 /// Sews and drapes `pattern` on `bodies` with `settings`, a line of progress on a terminal.
