@@ -308,6 +308,20 @@ case_ "Outputs stay where they belong" "garment: a panel named ../front with --p
 new
 sed 's/\[0, 80, 30\]/[1e200, 80, 30]/' "$fixtures/garments/tube_specification.json" >tube_specification.json
 case_ "$R" "garment: a panel translated by 1e200" garment tube_specification.json --body no_such_body.obj -o out
+# tube_case KIND SED: the tube fixture edited by the sed script SED, refused by the reader.
+tube_case() {
+    new
+    sed "$2" "$fixtures/garments/tube_specification.json" >tube_specification.json
+    case_ "$R" "garment: $1" garment tube_specification.json --body no_such_body.obj -o out
+}
+tube_case "a panel name given twice" 's/"back":/"front":/'
+tube_case "a stitch to edge -1" 's/"edge": 3}/"edge": -1}/'
+tube_case "a panel with its vertices on a line" '0,/\[\[-30, 0\], \[30, 0\], \[30, 40\], \[-30, 40\]\]/s//[[0, 0], [10, 0], [20, 0], [30, 0]]/'
+tube_case "edge loops twice round" 's/{"endpoints": \[3, 0\]}\],/{"endpoints": [3, 0]}, {"endpoints": [0, 1]}, {"endpoints": [1, 2]}, {"endpoints": [2, 3]}, {"endpoints": [3, 0]}],/'
+tube_case "a panel name with a line break" 's/"back"/"back\\nv 1 2 3"/g'
+new
+cp "$fixtures/garments/tube_specification.json" .
+case_ "Outputs stay where they belong" "garment: --report over the pattern" garment tube_specification.json --body no_such_body.obj -o out --report tube_specification.json
 
 # Other reader errors: batch plans (tests/batch.rs).
 new
