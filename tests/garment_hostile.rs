@@ -292,3 +292,41 @@ fn a_report_over_the_pattern_is_refused_before_any_work() {
     let (ok, stderr) = garment_with_report(p, o, o);
     assert!(!ok && stderr.contains("over the output folder"), "{stderr}");
 }
+
+#[test]
+fn a_panel_of_100000_short_edges_is_refused_by_its_crowded_outline() {
+    // Each 0.025 mm edge took a particle of its own: 100,000 particles on a 2.5 m outline
+    // that needs 63 at 4 cm, and the solver's allocation of 8 GB aborted the run.
+    let pattern = parse(&ngon_pattern(100_000, None), Path::new("p.json")).unwrap();
+    let opts = AssembleOptions {
+        spacing: 0.04,
+        ..AssembleOptions::default()
+    };
+    let errors = assemble(&pattern, &opts).expect_err("refused");
+    let message = errors[0].to_string();
+    assert!(
+        message.starts_with("panel 'front': its outline takes 100000 particles where its 2.513 m at spacing 0.04 m needs about 63"),
+        "{message}"
+    );
+    // The real patterns, gathers and short edges included, are far from it at 2 mm (0.2 in
+    // their centimetres): samples against twice the need plus 1000.
+    let Some(data) = common::realdata() else {
+        return;
+    };
+    for file in std::fs::read_dir(data.join("patterns")).unwrap() {
+        let path = file.unwrap().path();
+        if path.extension().is_none_or(|e| e != "json") {
+            continue;
+        }
+        let p = drapekit::garment::read(&path).unwrap();
+        let counts = drapekit::garment::sample::edge_segments(&p, 0.2);
+        for s in drapekit::garment::sample::sample_all(&p, &counts) {
+            let n = s.points.len();
+            let perimeter: f64 = (0..n)
+                .map(|i| (s.points[(i + 1) % n] - s.points[i]).norm())
+                .sum();
+            let needed = (perimeter / 0.2).ceil() as usize;
+            assert!(n <= 2 * needed, "{}: {n} {needed}", path.display());
+        }
+    }
+}

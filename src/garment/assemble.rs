@@ -143,6 +143,16 @@ pub enum AssembleError {
     /// The spacing is not a positive length.
     #[error("spacing {spacing} m must be a positive number")]
     Spacing { spacing: f64 },
+    /// A panel's outline takes far more particles than its perimeter needs at the spacing
+    /// ([`MAX_CROWDED_SAMPLES`]).
+    #[error("panel '{panel}': its outline takes {samples} particles where its {perimeter:.3} m at spacing {spacing} m needs about {needed}: every edge takes at least one, and an edge stitched to a longer one takes the longer one's count; at most twice the need plus 1000: join the short edges (a curve is one edge with a curvature) or stitch edges of like lengths")]
+    Crowded {
+        panel: String,
+        samples: usize,
+        perimeter: f64,
+        needed: f64,
+        spacing: f64,
+    },
     /// The panels together would give more than [`pattern::MAX_PARTICLES`] particles (each
     /// panel's estimate, and at least its outline's samples, summed before any is built).
     #[error("the pattern's {panels} panel(s) give about {estimate} particles at spacing {spacing} m; a garment has at most {limit}: use a larger spacing, or fewer or smaller panels")]
@@ -152,6 +162,35 @@ pub enum AssembleError {
         spacing: f64,
         limit: usize,
     },
+}
+
+/// The outline samples beyond twice what a panel's perimeter needs at the spacing that a
+/// panel may have (edges shorter than the spacing each take one; a short edge stitched to a
+/// long one takes its count). A panel of 100,000 edges of 0.1 mm put that many particles
+/// within centimetres of each other, and the solver's blocks between them took 8 GB.
+pub const MAX_CROWDED_SAMPLES: usize = 1000;
+
+/// Refuses each panel whose outline has more than twice the samples its perimeter needs at
+/// spacing `h`, plus [`MAX_CROWDED_SAMPLES`].
+fn check_crowding(pattern: &Pattern, outlines: &[Vec<Point2>], h: f64) -> Vec<AssembleError> {
+    let mut errors = Vec::new();
+    for (panel, outline) in pattern.panels.iter().zip(outlines) {
+        let n = outline.len();
+        let perimeter: f64 = (0..n)
+            .map(|i| (outline[(i + 1) % n] - outline[i]).norm())
+            .sum();
+        let needed = (perimeter / h).ceil();
+        if n as f64 > 2.0 * needed + MAX_CROWDED_SAMPLES as f64 {
+            errors.push(AssembleError::Crowded {
+                panel: panel.name.clone(),
+                samples: n,
+                perimeter,
+                needed,
+                spacing: h,
+            });
+        }
+    }
+    errors
 }
 
 /// Refuses panels that together would give more than [`pattern::MAX_PARTICLES`] particles:
@@ -208,6 +247,10 @@ pub fn assemble(
                 .collect()
         })
         .collect();
+    let crowded = check_crowding(pattern, &outlines, h);
+    if !crowded.is_empty() {
+        return Err(crowded);
+    }
     check_total(&outlines, h).map_err(|e| vec![e])?;
     let (mut pieces, mut errors, mut outline_particle) = (Vec::new(), Vec::new(), Vec::new());
     let mut first = 0u32;
