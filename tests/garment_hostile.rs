@@ -330,3 +330,35 @@ fn a_panel_of_100000_short_edges_is_refused_by_its_crowded_outline() {
         }
     }
 }
+
+#[test]
+fn a_list_of_the_wrong_length_says_how_many_it_has() {
+    // A 3D vertex, a third endpoint or a 2-number translation said "trailing characters" (or
+    // "invalid length") at a column.
+    for (from, to, expected) in [
+        (
+            "[[-30, 0], [30, 0], [30, 40], [-30, 40]]",
+            "[[-30, 0, 0], [30, 0], [30, 40], [-30, 40]]",
+            "vertex 0 has 3 coordinate(s); a panel's vertex is [x, y] (2D)",
+        ),
+        (
+            r#"{"endpoints": [0, 1]}"#,
+            r#"{"endpoints": [0, 1, 2]}"#,
+            "expected a list of 2 numbers here, got 3",
+        ),
+        (
+            "[0, 80, 30]",
+            "[0, 80]",
+            "expected a list of 3 numbers here, got 2",
+        ),
+    ] {
+        let text = tube().replacen(from, to, 1);
+        assert_ne!(text, tube());
+        match parse(&text, Path::new("p.json")) {
+            Err(SpecError::Shape { message, .. }) => {
+                assert!(message.starts_with(expected), "{message}")
+            }
+            other => panic!("{to}: {other:?}"),
+        }
+    }
+}

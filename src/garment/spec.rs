@@ -377,16 +377,18 @@ impl Default for RawProperties {
 
 #[derive(Deserialize)]
 struct RawPanel {
+    #[serde(deserialize_with = "vertices")]
     vertices: Vec<[f64; 2]>,
     edges: Vec<RawEdge>,
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact")]
     translation: [f64; 3],
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact")]
     rotation: [f64; 3],
 }
 
 #[derive(Deserialize)]
 struct RawEdge {
+    #[serde(deserialize_with = "exact")]
     endpoints: [usize; 2],
     #[serde(default)]
     curvature: Option<Value>,
@@ -397,6 +399,31 @@ struct RawEdge {
 enum RawStitchPart {
     End { panel: String, edge: usize },
     Flag(String),
+}
+
+/// A list of exactly `N` items, refused with how many it has (serde's own error for a longer
+/// list is "trailing characters").
+fn exact<'de, D, T, const N: usize>(d: D) -> Result<[T; N], D::Error>
+where
+    D: serde::Deserializer<'de>,
+    T: Deserialize<'de>,
+{
+    let items: Vec<T> = Vec::deserialize(d)?;
+    let n = items.len();
+    let m = format!("expected a list of {N} numbers here, got {n}");
+    items.try_into().map_err(|_| serde::de::Error::custom(m))
+}
+
+/// A panel's `vertices`, each `[x, y]`, refused by the first that is not, with its index.
+fn vertices<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Vec<[f64; 2]>, D::Error> {
+    let raw: Vec<Vec<f64>> = Vec::deserialize(d)?;
+    (raw.into_iter().enumerate())
+        .map(|(i, v)| {
+            let n = v.len();
+            let m = format!("vertex {i} has {n} coordinate(s); a panel's vertex is [x, y] (2D)");
+            <[f64; 2]>::try_from(v).map_err(|_| serde::de::Error::custom(m))
+        })
+        .collect()
 }
 
 /// `pattern.panels`, refusing a name given twice (a JSON object would keep the last panel of
