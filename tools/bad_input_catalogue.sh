@@ -319,6 +319,7 @@ tube_case "a stitch to edge -1" 's/"edge": 3}/"edge": -1}/'
 tube_case "a panel with its vertices on a line" '0,/\[\[-30, 0\], \[30, 0\], \[30, 40\], \[-30, 40\]\]/s//[[0, 0], [10, 0], [20, 0], [30, 0]]/'
 tube_case "edge loops twice round" 's/{"endpoints": \[3, 0\]}\],/{"endpoints": [3, 0]}, {"endpoints": [0, 1]}, {"endpoints": [1, 2]}, {"endpoints": [2, 3]}, {"endpoints": [3, 0]}],/'
 tube_case "a panel name with a line break" 's/"back"/"back\\nv 1 2 3"/g'
+tube_case "a vertex with three coordinates" 's/\[\[-30, 0\], \[30, 0\]/[[-30, 0, 0], [30, 0]/'
 new
 cp "$fixtures/garments/tube_specification.json" .
 case_ "Outputs stay where they belong" "garment: --report over the pattern" garment tube_specification.json --body no_such_body.obj -o out --report tube_specification.json
