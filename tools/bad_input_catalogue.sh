@@ -652,8 +652,14 @@ new
 python3 -c "print('height,x,y'); [print(f'{k},1,0\\n{k},0,1\\n{k},-1,0') for k in range(10001)]" >many.csv
 case_ "$B" "fit: a sections file of 10,001 sections (the fit's time grows as their square)" fit --sections many.csv -o form.obj
 new
-printf 'v 0 0 0\nv 1 1 1\nv 2 2 2\nf 1 2 3\n' >line.obj
-case_ "$R" "fit: a scan whose every face is degenerate" fit --from-mesh line.obj -o form.obj
+printf 'units = "cm"\nstature = 170\nwaist_girth = 70\nbust_girth = 1e-20\n' >thin.toml
+case_ "$M" "fit: a bust of 1e-20 cm (once 'section 26 is degenerate')" fit --measurements thin.toml -o form.obj
+fit_case "a GarmentCode body YAML with a key given twice" --measurements dup.yaml 'body:\n  height: 170\n  waist: 70\n  bust: 90\n  height: 180\n'
+fit_case "a FreeSewing JSON with a key given twice" --measurements dup.json '{"measurements": {"waist": 700, "chest": 900,\n "waist": 800}}\n'
+new
+python3 -c "print('a0: &a0 [x, x, x, x, x, x, x, x, x, x]'); [print(f'a{i}: &a{i} [' + ', '.join([f'*a{i-1}'] * 10) + ']') for i in range(1, 10)]; print('body: {height: 170, waist: 70, bust: 90}')" >bomb.yaml
+case_ "$B" "fit: a GarmentCode YAML whose aliases expand 10^10 times" fit --measurements bomb.yaml -o form.obj
+fit_case "a scan whose every face is degenerate" --from-mesh line.obj 'v 0 0 0\nv 1 1 1\nv 2 2 2\nf 1 2 3\n'
 
 # ---------------------------------------------------------------------------------------------
 # Preparation never breaks a good mesh; measurements brought in (real data).

@@ -77,12 +77,14 @@ pub fn parse_any(text: &str, path: &Path) -> Result<Imported, FitError> {
     let ext = ext.to_ascii_lowercase();
     let trimmed = text.trim_start_matches('\u{feff}').trim_start();
     if trimmed.starts_with('{') || ext == "json" {
-        let value: serde_json::Value = serde_json::from_str(text).map_err(|e| FitError::Json {
+        let json_error = |e: serde_json::Error| FitError::Json {
             path: path.to_path_buf(),
             line: e.line(),
             column: e.column(),
-            message: format!("{e} ({FORMATS})"),
-        })?;
+            message: format!("{} ({FORMATS})", super::input::json_message(&e)),
+        };
+        serde_json::from_str::<Unique>(text).map_err(json_error)?;
+        let value: serde_json::Value = serde_json::from_str(text).map_err(json_error)?;
         return from_freesewing(&value, path);
     }
     if ext == "yaml" || ext == "yml" || trimmed.starts_with("body:") {
@@ -94,6 +96,59 @@ pub fn parse_any(text: &str, path: &Path) -> Result<Imported, FitError> {
         format: "toml",
         notes: Vec::new(),
     })
+}
+
+/// Any JSON or YAML value whose mappings give each key once (serde_json and the YAML reader
+/// kept one of a key given twice without a word: `{"waist": 700, "waist": 800}` was a waist
+/// of 800).
+struct Unique;
+
+impl<'de> serde::Deserialize<'de> for Unique {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Unique, D::Error> {
+        d.deserialize_any(UniqueVisitor)
+    }
+}
+
+struct UniqueVisitor;
+
+impl<'de> serde::de::Visitor<'de> for UniqueVisitor {
+    type Value = Unique;
+    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str("a JSON or YAML value")
+    }
+    fn visit_map<A: serde::de::MapAccess<'de>>(self, mut a: A) -> Result<Unique, A::Error> {
+        let mut keys = std::collections::BTreeSet::new();
+        while let Some(k) = a.next_key::<String>()? {
+            if !keys.insert(k.clone()) {
+                let e = format!("the key '{k}' is given twice in one object");
+                return Err(serde::de::Error::custom(e));
+            }
+            a.next_value::<Unique>()?;
+        }
+        Ok(Unique)
+    }
+    fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut a: A) -> Result<Unique, A::Error> {
+        while a.next_element::<Unique>()?.is_some() {}
+        Ok(Unique)
+    }
+    fn visit_bool<E>(self, _: bool) -> Result<Unique, E> {
+        Ok(Unique)
+    }
+    fn visit_i64<E>(self, _: i64) -> Result<Unique, E> {
+        Ok(Unique)
+    }
+    fn visit_u64<E>(self, _: u64) -> Result<Unique, E> {
+        Ok(Unique)
+    }
+    fn visit_f64<E>(self, _: f64) -> Result<Unique, E> {
+        Ok(Unique)
+    }
+    fn visit_str<E>(self, _: &str) -> Result<Unique, E> {
+        Ok(Unique)
+    }
+    fn visit_unit<E>(self) -> Result<Unique, E> {
+        Ok(Unique)
+    }
 }
 
 /// The numbers of a FreeSewing object, in mm; every non-number named.
@@ -195,14 +250,16 @@ pub fn from_garmentcode(text: &str, path: &Path) -> Result<Imported, FitError> {
     struct File {
         body: BTreeMap<String, f64>,
     }
-    let file: File = yaml_serde::from_str(text).map_err(|e| FitError::Key {
+    let yaml_error = |e: yaml_serde::Error| FitError::Key {
         path: path.to_path_buf(),
         key: "body".into(),
         message: match e.location() {
             Some(l) => format!("line {}: {e} ({FORMATS})", l.line()),
             None => format!("{e} ({FORMATS})"),
         },
-    })?;
+    };
+    yaml_serde::from_str::<Unique>(text).map_err(yaml_error)?;
+    let file: File = yaml_serde::from_str(text).map_err(yaml_error)?;
     let b = &file.body;
     if let Some((k, v)) = b.iter().find(|(_, v)| !v.is_finite()) {
         return Err(FitError::Key {
@@ -284,6 +341,25 @@ mod tests {
             "GarmentCode's hips is the full hip girth"
         );
         assert!(got.notes[0].contains("neck_w"), "{:?}", got.notes);
+    }
+
+    #[test]
+    fn a_garmentcode_key_given_twice_is_refused() {
+        // It was read without a word, one of the two values kept.
+        let yaml = "body:\n  height: 170\n  waist: 70\n  bust: 90\n  height: 180\n";
+        let e = from_garmentcode(yaml, "b.yaml".as_ref())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("the key 'height' is given twice"), "{e}");
+    }
+
+    #[test]
+    fn a_freesewing_key_given_twice_is_refused() {
+        // It was read without a word, the last value kept.
+        let json = "{\"measurements\": {\"waist\": 700,\n \"waist\": 800}}";
+        let e = parse_any(json, "m.json".as_ref()).unwrap_err().to_string();
+        assert!(e.starts_with("m.json:2:"), "{e}");
+        assert!(e.contains("the key 'waist' is given twice"), "{e}");
     }
 
     #[test]

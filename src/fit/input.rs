@@ -67,19 +67,20 @@ pub fn parse(text: &str, path: &Path) -> Result<SectionsFile, FitError> {
     }
 }
 
+/// A serde_json error's message without the " at line L column C" it ends with (the location
+/// goes in front instead).
+pub(crate) fn json_message(e: &serde_json::Error) -> String {
+    let msg = e.to_string();
+    msg.rsplit_once(" at line ")
+        .map_or(msg.clone(), |(m, _)| m.to_string())
+}
+
 fn read_json(path: &Path, text: &str) -> Result<SectionsFile, FitError> {
-    let f: JsonFile = serde_json::from_str(text).map_err(|e| {
-        // serde_json appends " at line L column C"; the location goes in front instead.
-        let msg = e.to_string();
-        let msg = msg
-            .rsplit_once(" at line ")
-            .map_or(msg.clone(), |(m, _)| m.to_string());
-        FitError::Json {
-            path: path.to_path_buf(),
-            line: e.line(),
-            column: e.column(),
-            message: msg,
-        }
+    let f: JsonFile = serde_json::from_str(text).map_err(|e| FitError::Json {
+        path: path.to_path_buf(),
+        line: e.line(),
+        column: e.column(),
+        message: json_message(&e),
     })?;
     let units = match f.units {
         Some(u) => Some(u.parse::<Units>().map_err(|m| FitError::Key {

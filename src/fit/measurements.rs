@@ -38,7 +38,8 @@
 //!
 //! **Limits.** Every section must be finite numbers, so lengths whose products and quotients
 //! leave the range of an f64 are refused by key: a stature outside 1e-100..1e100, a girth,
-//! width or depth over 10 times the stature, levels closer than 1e-6 of the stature.
+//! width or depth over 10 times the stature, a girth under 1e-6 of it, levels closer than 1e-6
+//! of the stature.
 
 use super::error::FitError;
 use super::fitter::GirthTarget;
@@ -193,6 +194,11 @@ const STATURE_RANGE: (f64, f64) = (1e-100, 1e100);
 /// The most a girth, width or depth may be, as a multiple of the stature (a body's largest
 /// girth is about 0.6 of it); beyond, the model's sections need not be finite.
 const MAX_TO_STATURE: f64 = 10.0;
+
+/// The least a girth may be, as a fraction of the stature: far below, its section is lost in
+/// the rounding of the model's coordinates (a bust of 1e-20 cm on a 170 cm body collapsed to
+/// a line, refused as 'section 26 is degenerate').
+const MIN_GIRTH_TO_STATURE: f64 = 1e-6;
 
 /// The least distance between two levels, as a fraction of the stature (the default levels are
 /// 0.024 to 0.07 apart): closer levels give PCHIP slopes that overflow.
@@ -453,7 +459,17 @@ fn check_keys(m: &Measurements, p: &mut Problems) -> (Units, f64) {
 fn check_girths(m: &Measurements, stature: Option<f64>, p: &mut Problems) {
     let girths = girth_keys(m);
     for (k, _, v) in girths {
-        p.positive(k, v);
+        let (Some(v), Some(s)) = (p.positive(k, v), stature) else {
+            continue;
+        };
+        if v < MIN_GIRTH_TO_STATURE * s {
+            let m = format!(
+                "{} is less than {MIN_GIRTH_TO_STATURE:e} of the stature {}: no body is that thin",
+                short(v),
+                short(s)
+            );
+            p.bad(k, m);
+        }
     }
     for (k, v) in across_keys(m) {
         let (Some(s), Some(v)) = (stature, v) else {
@@ -833,6 +849,15 @@ mod tests {
             ..base.clone()
         });
         assert!(girth.contains("key 'waist_girth'"), "{girth}");
+        // A bust of 1e-20 cm was lost in the model's rounding: 'section 26 is degenerate'.
+        let thin = err(Measurements {
+            bust_girth: Some(1e-20),
+            ..base.clone()
+        });
+        assert!(
+            thin.contains("key 'bust_girth'") && thin.contains("no body is that thin"),
+            "{thin}"
+        );
         // The levels below the waist are placed between the floor and it: 1e-320 apart.
         let close = err(Measurements {
             waist_height: Some(1e-320),
@@ -855,6 +880,10 @@ mod tests {
             },
             Measurements {
                 waist_girth: Some(1700.0),
+                ..base.clone()
+            },
+            Measurements {
+                bust_girth: Some(170e-6),
                 ..base.clone()
             },
             Measurements {
