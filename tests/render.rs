@@ -567,6 +567,36 @@ fn flags_and_the_output_are_refused_before_any_input_is_read() {
     let mesh = write_obj(dir.path(), "box.obj", &generate::cube(1.0));
     let contact = [s(&mesh), "-o", s(&out), "--color", "contact"];
     refused(&contact, "--color contact:");
+    // --to with strain was ignored without a word; a body without faces was not named.
+    let strain_to = [
+        s(&mesh),
+        "-o",
+        s(&out),
+        "--color",
+        "strain",
+        "--to",
+        s(&mesh),
+    ];
+    refused(
+        &strain_to,
+        "--to gives the body of --color distance or contact",
+    );
+    let points = dir.path().join("points.obj");
+    std::fs::write(&points, "v 0 0 0\nv 1 0 0\nv 0 1 0\n").unwrap();
+    let to_points = [
+        s(&mesh),
+        "-o",
+        s(&out),
+        "--color",
+        "distance",
+        "--to",
+        s(&points),
+    ];
+    refused(&to_points, "points.obj: the body has no faces");
+    std::fs::remove_file(&points).unwrap();
+    // A span beyond the numbers coloured every value as the minimum.
+    let o = common::run(&["render", s(&mesh), "-o", s(&out), "--range=-1e308:1e308"]);
+    assert_eq!(o.status.code(), Some(2), "{}", common::text(&o).1);
     // A strain of 1e90 / 1e-250: 'mesh 0: the value of vertex 0 is not finite', no file.
     let far = dir.path().join("far.obj");
     let obj = "v 0 0 0\nv 1e90 0 0\nv 0 1 0\nvt 0 0\nvt 1e-250 0\nvt 0 1\nf 1/1 2/2 3/3\n";
@@ -634,4 +664,58 @@ fn a_frames_folder_of_mixed_frames_is_refused_with_every_problem() {
     );
     let report = render_json(&[s(&good), "-o", s(&out), "--width", "64", "--height", "48"]);
     assert_eq!(report["frames"], 2);
+}
+
+#[cfg(unix)]
+#[test]
+fn sigterm_stops_an_animation_between_frames_and_leaves_nothing() {
+    let dir = scratch("sigterm");
+    let frames = dir.path().join("frames");
+    std::fs::create_dir(&frames).unwrap();
+    let ball = generate::icosphere(3);
+    for k in 0..200 {
+        write_obj(&frames, &format!("ball_{k:07}.obj"), &ball);
+    }
+    // A stale temporary picture of a killed render (its writer's id is past Linux's largest).
+    let stale = dir.path().join(".drapekit-tmp-4194305-anim.gif.a1B2c3.tmp");
+    std::fs::write(&stale, "half a picture").unwrap();
+    let out = dir.path().join("anim.gif");
+    let child = common::drapekit()
+        .args([
+            "render",
+            s(&frames),
+            "-o",
+            s(&out),
+            "--width",
+            "1024",
+            "--height",
+            "1024",
+        ])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // The stale file goes first; its own temporary picture appears as the first frame is drawn.
+    let start = std::time::Instant::now();
+    while stale.exists() || common::listing(dir.path()).len() < 2 {
+        assert!(
+            start.elapsed().as_secs() < 600,
+            "no picture begun in 10 minutes"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    // SAFETY: a signal to the child we started.
+    assert_eq!(unsafe { libc::kill(child.id() as i32, libc::SIGTERM) }, 0);
+    let o = child.wait_with_output().unwrap();
+    let err = common::text(&o).1;
+    assert_eq!(o.status.code(), Some(143), "{err}");
+    assert!(
+        err.contains("interrupted by SIGTERM while drawing"),
+        "{err}"
+    );
+    assert!(
+        err.contains("removed 1 temporary file"),
+        "the stale one: {err}"
+    );
+    assert_eq!(common::listing(dir.path()), ["frames"]);
 }

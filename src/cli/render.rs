@@ -149,13 +149,18 @@ pub fn parse_colour(s: &str) -> Result<Rgb, String> {
 }
 
 fn parse_range(s: &str) -> Result<[f64; 2], String> {
-    let bad = || format!("range '{s}': expected MIN:MAX, two finite numbers with MIN < MAX");
+    let bad = || {
+        format!(
+            "range '{s}': expected MIN:MAX, two finite numbers with MIN < MAX and MAX - MIN finite"
+        )
+    };
     let (a, b) = s.split_once(':').ok_or_else(bad)?;
     let (a, b): (f64, f64) = (
         a.trim().parse().map_err(|_| bad())?,
         b.trim().parse().map_err(|_| bad())?,
     );
-    if !(a.is_finite() && b.is_finite() && a < b) {
+    // A span beyond the numbers (-1e308:1e308) coloured every value as the minimum.
+    if !(a < b && (b - a).is_finite()) {
         return Err(bad());
     }
     Ok([a, b])
@@ -414,11 +419,12 @@ fn check_flags(args: &RenderArgs) -> anyhow::Result<Encoding> {
     if let Some(l) = args.cloth_lift.filter(|l| !(l.is_finite() && *l >= 0.0)) {
         bail!("--cloth-lift {l}: must be 0 or more");
     }
-    if args.range.is_some() && args.color == Quantity::Contact {
-        bail!("--range applies to strain and distance, not contact");
+    let measured = matches!(args.color, Quantity::Distance | Quantity::Contact);
+    if args.to.is_some() && !measured {
+        bail!("--to gives the body of --color distance or contact");
     }
-    if args.color == Quantity::Plain && (args.to.is_some() || args.range.is_some()) {
-        bail!("--to and --range need --color strain, distance or contact");
+    if args.range.is_some() && !matches!(args.color, Quantity::Strain | Quantity::Distance) {
+        bail!("--range applies to --color strain and distance");
     }
     if args.mesh_colors.len() > args.meshes.len() {
         bail!(
@@ -483,6 +489,12 @@ fn body(args: &RenderArgs, job: &Job) -> anyhow::Result<Option<TriMesh>> {
         Some(p) => load(p, &args.read)?.mesh,
         None => field::join(job.objects.iter().map(|o| &o.mesh)),
     };
+    if let Some(p) = args.to.as_ref().filter(|_| body.faces.is_empty()) {
+        bail!(
+            "--to {}: the body has no faces to measure against",
+            p.display()
+        );
+    }
     if body.faces.is_empty() {
         bail!(
             "--color {}: no body with faces to measure against (give --to BODY, or the body after the cloth)",
@@ -504,6 +516,9 @@ fn value_range(values: &[Vec<Option<Vec<f64>>>]) -> Option<[f64; 2]> {
 /// Runs `drapekit render`.
 pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     let job = gather(&args)?;
+    // The temporary pictures of renders that were killed (a second signal, or SIGKILL).
+    let folder = args.output.parent().filter(|p| !p.as_os_str().is_empty());
+    super::remove_stale_temps(&[folder.unwrap_or(Path::new("."))]);
     let body = body(&args, &job)?;
     let values: Vec<Vec<Option<Vec<f64>>>> = job
         .frames
@@ -613,16 +628,30 @@ fn write_pictures(
     }
     let delay_ms = (1000.0 / args.fps).round() as u16;
     let (n, size) = (job.frames.len(), [args.width, args.height]);
-    let frames = (0..n).map(|k| draw(k).map_err(std::io::Error::other));
-    io::write_atomic(&args.output, &inputs, |w| {
+    // SIGINT or SIGTERM stops the drawing between frames; the picture is then not written.
+    let signals = super::interrupt::install()?;
+    let stop = || signals.cancel().load(std::sync::atomic::Ordering::SeqCst);
+    let drawn = |k: usize| {
+        if stop() {
+            return Err(std::io::Error::other("interrupted"));
+        }
+        draw(k).map_err(std::io::Error::other)
+    };
+    let frames = (0..n).map(&drawn);
+    let written = io::write_atomic(&args.output, &inputs, |w| {
         match (job.encoding, job.animated) {
             (Encoding::Gif, _) => render::image::write_gif(w, size, (delay_ms / 10).max(1), frames),
             (Encoding::Png, true) => render::image::write_apng(w, size, n, delay_ms, frames),
-            (Encoding::Png, false) => {
-                render::image::write_png(w, &draw(0).map_err(std::io::Error::other)?)
-            }
+            (Encoding::Png, false) => render::image::write_png(w, &drawn(0)?),
         }
-    })?;
+    });
+    if written.is_err() && stop() {
+        let out = args.output.display();
+        return Err(signals
+            .interrupted(format_args!("while drawing {out}: nothing was written"))
+            .into());
+    }
+    written?;
     Ok(())
 }
 
