@@ -626,6 +626,12 @@ new
 printf "$TRI" >tri.obj
 case_ "$M" "render: --mesh-colors with more colours than meshes" render tri.obj -o o.png --mesh-colors '#ff0000,#00ff00'
 new
+printf "$TRI" >tri.obj
+case_ "$M" "render: --to with --color strain (ignored before)" render tri.obj -o o.png --color strain --to tri.obj
+new
+printf "$TRI" >tri.obj
+case_ "$M" "render: a colour range whose span is beyond the numbers" render tri.obj -o o.png --color distance --to tri.obj --range=-1e308:1e308
+new
 mkdir r.json
 case_ "$O" "inspect: --report an existing folder (refused before reading)" inspect nope.obj --report r.json
 new
