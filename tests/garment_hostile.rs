@@ -362,3 +362,35 @@ fn a_list_of_the_wrong_length_says_how_many_it_has() {
         }
     }
 }
+
+#[test]
+fn a_scenes_report_over_an_input_is_refused_before_any_work() {
+    // drapekit drape with a [[garment]] and --report naming the scene (or the pattern) sewed
+    // and draped the garment, wrote it, and only then refused the report.
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("tube_specification.json"), tube()).unwrap();
+    common::write_y_up_obj(
+        &common::cylinder(0.186, 0.5, 1.5, 48),
+        &d.join("column.obj"),
+    );
+    let scene = d.join("scene.toml");
+    std::fs::write(
+        &scene,
+        "[[object]]\nmesh = \"column.obj\"\nup = \"y\"\n\n[[garment]]\npattern = \"tube_specification.json\"\nspacing = 0.04\nsew_max = 0.2\nsettle_max = 0.1\n",
+    )
+    .unwrap();
+    let out = d.join("out");
+    for report in [scene.clone(), d.join("tube_specification.json")] {
+        let (s, o, r) = (
+            scene.to_str().unwrap(),
+            out.to_str().unwrap(),
+            report.to_str().unwrap(),
+        );
+        let run = common::run(&["drape", s, "-o", o, "--report", r]);
+        let (_, stderr) = common::text(&run);
+        assert!(!run.status.success());
+        assert!(stderr.contains("it is the input file"), "{stderr}");
+        assert!(!out.exists(), "{stderr}");
+    }
+}

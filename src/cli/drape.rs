@@ -475,6 +475,11 @@ struct Written {
 pub fn run(args: DrapeArgs) -> anyhow::Result<()> {
     let start = std::time::Instant::now();
     let mut sc = scene::read(&args.scene)?;
+    let inputs: Vec<&Path> = (std::iter::once(sc.path.as_path()))
+        .chain(sc.objects.iter().map(|o| o.mesh.as_path()))
+        .chain(sc.garment.iter().map(|g| g.path.as_path()))
+        .collect();
+    super::check_report(args.report.as_deref(), &args.output, &inputs)?;
     if sc.garment.is_some() {
         return super::drape_garment::run(&args, sc, start);
     }

@@ -675,7 +675,8 @@ pub(super) fn judge(g: &gd::Garment) -> Judged {
 pub fn run(args: GarmentArgs) -> anyhow::Result<()> {
     let start = std::time::Instant::now();
     let settings = settings(&args)?;
-    check_report(&args)?;
+    let inputs = [args.pattern.as_path(), args.body.as_path()];
+    super::check_report(args.report.as_deref(), &args.output, &inputs)?;
     let pattern = crate::garment::read(&args.pattern)?;
     if args.panels {
         check_panel_names(&pattern, &args.pattern)?;
@@ -691,7 +692,6 @@ pub fn run(args: GarmentArgs) -> anyhow::Result<()> {
     super::remove_stale_temps(&[&args.output, &args.output.join("panels")]);
     let g = sew_interruptibly(&pattern, vec![gd::body_collider(body)], &settings)??;
     let (outcome, world) = outcome(g, &pattern, Up::Y, 1.0);
-    let inputs = [args.pattern.as_path(), args.body.as_path()];
     let files = write_outputs(&args, &world, &inputs)?;
     let report = GarmentReport {
         pattern: args.pattern.display().to_string(),
@@ -717,23 +717,6 @@ pub fn run(args: GarmentArgs) -> anyhow::Result<()> {
         args.json,
         print_summary,
     )
-}
-
-/// Refuses, before any work, a `--report` that is an input, the output folder, a folder or in
-/// a missing folder (each was refused only after the whole run: the garment written, the
-/// report not).
-fn check_report(args: &GarmentArgs) -> anyhow::Result<()> {
-    let Some(r) = &args.report else {
-        return Ok(());
-    };
-    if crate::io::same_target(r, &args.output) {
-        bail!(
-            "--report {}: the report would be written over the output folder",
-            r.display()
-        );
-    }
-    crate::io::check_target(r, &[&args.pattern, &args.body])?;
-    Ok(())
 }
 
 /// Sews and drapes `pattern` on `bodies` with `settings`, a line of progress on a terminal.

@@ -197,6 +197,27 @@ fn refuse_file_output(out: &std::path::Path) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Refuses, before any work, a `--report` that is one of `inputs`, the output folder, a
+/// folder or in a missing folder (each was refused only when the report was written, after
+/// the whole run: the outputs written, the report not).
+pub fn check_report(
+    report: Option<&std::path::Path>,
+    output: &std::path::Path,
+    inputs: &[&std::path::Path],
+) -> anyhow::Result<()> {
+    let Some(r) = report else {
+        return Ok(());
+    };
+    if crate::io::same_target(r, output) {
+        anyhow::bail!(
+            "--report {}: the report would be written over the output folder",
+            r.display()
+        );
+    }
+    crate::io::check_target(r, inputs)?;
+    Ok(())
+}
+
 /// Whether progress bars may be drawn (stderr is a terminal).
 pub fn interactive() -> bool {
     std::io::stderr().is_terminal()
