@@ -230,8 +230,9 @@ pub enum Problem {
 /// times too small, not this), and sampling its outline would not fit in memory.
 pub const PANEL_SIZE: [f64; 2] = [1e-3, 100.0];
 
-/// The least area a garment panel encloses, m^2: 1 mm^2, the square of the least size.
-pub const PANEL_AREA_MIN: f64 = PANEL_SIZE[0] * PANEL_SIZE[0];
+/// The least area a garment panel encloses, m^2: a tenth of the square of the least size (a
+/// square of the least size across, corner to corner, encloses half of that square).
+pub const PANEL_AREA_MIN: f64 = 0.1 * PANEL_SIZE[0] * PANEL_SIZE[0];
 
 /// How far from the pattern's origin a panel's translation or vertex may be, m. A garment
 /// is placed round a body at the origin; a panel a kilometre away is a wrong translation,
@@ -876,6 +877,7 @@ fn flag(v: &Value) -> Option<bool> {
 // ---- Panel checks ----------------------------------------------------------------------
 
 fn check_loop(name: &str, edges: &[Edge], problems: &mut Vec<Problem>) {
+    let before = problems.len();
     if edges.len() < 3 {
         problems.push(Problem::TooFewEdges {
             panel: name.into(),
@@ -894,7 +896,9 @@ fn check_loop(name: &str, edges: &[Edge], problems: &mut Vec<Problem>) {
             });
         }
     }
-    check_once_round(name, edges, problems);
+    if problems.len() == before {
+        check_once_round(name, edges, problems);
+    }
 }
 
 /// Edges that start at a vertex an earlier edge starts at: the loop passes it twice (goes
