@@ -109,39 +109,6 @@ fn ten_thousand_panels_are_refused_by_their_particles_together_before_any_is_bui
 }
 
 #[test]
-fn an_arc_of_a_radius_far_beyond_its_chord_is_the_nearly_straight_edge_it_says() {
-    // From (30, 0) to (30, 40): the centre 1e20 away rounded the chord's x = 30 off, and the
-    // arc's middle was drawn at x = 0 (a silently wrong panel); at 1e300, r^2 overflowed and
-    // every point was NaN (refused only by the cloth, naming an outline point).
-    use drapekit::garment::Curve;
-    use drapekit::math::Point2;
-    let (s, e) = (Point2::new(30.0, 0.0), Point2::new(30.0, 40.0));
-    for radius in [1e20, 1e300, f64::MAX] {
-        for (large_arc, right) in [(false, true), (false, false)] {
-            let arc = Curve::Arc {
-                radius,
-                large_arc,
-                right,
-            };
-            let mid = arc.point(&s, &e, 0.5);
-            assert!(
-                (mid - Point2::new(30.0, 20.0)).norm() < 1e-9,
-                "{radius}: {mid}"
-            );
-            assert!((arc.length(&s, &e) - 40.0).abs() < 1e-9, "{radius}");
-        }
-    }
-    // A half circle of radius 20 bulges 20 to the right of its way up (x = 50).
-    let half = Curve::Arc {
-        radius: 20.0,
-        large_arc: false,
-        right: true,
-    };
-    assert!((half.point(&s, &e, 0.5) - Point2::new(50.0, 20.0)).norm() < 1e-12);
-    assert!((half.point(&s, &e, 1.0) - e).norm() < 1e-12);
-}
-
-#[test]
 fn a_far_vertex_no_edge_uses_is_named_as_far_not_every_edge_as_zero_length() {
     // The zero-length test measured edges against the farthest vertex, used or not: one at
     // 1e300 made each of the four edges "zero length" and hid the vertex.

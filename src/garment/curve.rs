@@ -42,17 +42,15 @@ pub enum Curve {
     },
 }
 
-/// An arc's start as seen from its centre, radius and signed sweep (positive:
-/// counter-clockwise).
+/// An arc's centre, radius, start angle and signed sweep (positive: counter-clockwise).
 struct ArcGeometry {
-    from_center: Vec2,
+    center: Point2,
     radius: f64,
+    start_angle: f64,
     sweep: f64,
 }
 
-/// The geometry of an arc from `s` to `e`; `None` when `s == e` (nothing to sweep). The
-/// centre's distance from the chord is `r sqrt(1 - (half / r)^2)`, not `sqrt(r^2 - half^2)`,
-/// which overflows for a radius of 1e300.
+/// The geometry of an arc from `s` to `e`; `None` when `s == e` (nothing to sweep).
 fn arc_geometry(
     s: &Point2,
     e: &Point2,
@@ -69,26 +67,18 @@ fn arc_geometry(
     let r = radius.max(half);
     let left = Vec2::new(-d.y, d.x) / chord;
     let bulge = if right { -left } else { left };
-    let offset = r * (1.0 - (half / r).powi(2)).max(0.0).sqrt();
+    let offset = (r * r - half * half).max(0.0).sqrt();
     let toward = if large_arc { bulge } else { -bulge };
+    let center = Point2::from((s.coords + e.coords) / 2.0) + toward * offset;
     let small = 2.0 * (half / r).min(1.0).asin();
     let magnitude = if large_arc { 2.0 * PI - small } else { small };
+    let start = s - center;
     Some(ArcGeometry {
-        from_center: -d / 2.0 - toward * offset,
+        center,
         radius: r,
+        start_angle: start.y.atan2(start.x),
         sweep: if right { magnitude } else { -magnitude },
     })
-}
-
-impl ArcGeometry {
-    /// The point swept by `angle` from `s`: `s + (Rot(angle) - I) (s - centre)`, with `cos - 1`
-    /// as `-2 sin^2(angle / 2)`, so that an arc of a radius far beyond its chord keeps the
-    /// chord's digits (the centre itself, 1e20 away, would round them off).
-    fn point(&self, s: &Point2, angle: f64) -> Point2 {
-        let v = self.from_center;
-        let (sin, cos_m1) = (angle.sin(), -2.0 * (angle / 2.0).sin().powi(2));
-        s + Vec2::new(v.x * cos_m1 - v.y * sin, v.x * sin + v.y * cos_m1)
-    }
 }
 
 impl Curve {
@@ -112,7 +102,10 @@ impl Curve {
                 right,
             } => match arc_geometry(s, e, radius, large_arc, right) {
                 None => *s,
-                Some(a) => a.point(s, t * a.sweep),
+                Some(a) => {
+                    let angle = a.start_angle + t * a.sweep;
+                    a.center + Vec2::new(angle.cos(), angle.sin()) * a.radius
+                }
             },
         }
     }
