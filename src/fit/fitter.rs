@@ -28,8 +28,9 @@ use super::surface::{self, Surface};
 use super::trig;
 use crate::math::{Point2, Point3};
 use crate::mesh::diagnose::{diagnose, ShellState};
-use crate::mesh::slice::{girth, slice};
+use crate::mesh::slice::{girth, Slicer};
 use crate::mesh::TriMesh;
+use rayon::prelude::*;
 use realfft::RealFftPlanner;
 use serde::Serialize;
 
@@ -45,8 +46,8 @@ pub const MAX_NODE_POINTS: usize = 1 << 24;
 /// 400 MB and their triangles 800 MB more.
 pub const MAX_OUTPUT_VERTICES: usize = 1 << 24;
 
-/// The most sections a scan is sliced into or a measurement model gives (`--levels`): each
-/// level of a scan slices the whole mesh.
+/// The most sections a scan is sliced into or a measurement model gives (`--levels`): the
+/// error estimate's cost grows as their square.
 pub const MAX_LEVELS: usize = 10_000;
 
 /// Refuses `count` (given by `flag`) above `limit`, before anything is allocated for it.
@@ -322,19 +323,21 @@ fn held_out_error(sections: &[Section], n: usize, stride: usize, m: usize) -> f6
     let used: Vec<Section> = sections.iter().step_by(stride).cloned().collect();
     let ks = used.len();
     let s = surface::fit(&node_grid(&used, n), ks, n, m);
-    let mut worst: f64 = 0.0;
-    for (idx, sec) in sections.iter().enumerate().take(k - 1) {
-        if idx % stride == 0 {
-            continue;
-        }
-        let v = idx as f64 / stride as f64 / (ks - 1) as f64;
-        let truth = section::resample(&sec.points, n);
-        let ring = s.eval_ring(v, n);
-        for (t, p) in truth.iter().zip(&ring) {
-            worst = worst.max((Point3::new(t.x, t.y, sec.height) - p).norm());
-        }
-    }
-    worst
+    // Each held-out section costs a pass over all the nodes along, so they run in parallel; a
+    // maximum is the same in any order.
+    (0..k - 1)
+        .into_par_iter()
+        .filter(|idx| idx % stride != 0)
+        .map(|idx| {
+            let sec = &sections[idx];
+            let v = idx as f64 / stride as f64 / (ks - 1) as f64;
+            let truth = section::resample(&sec.points, n);
+            let ring = s.eval_ring(v, n);
+            (truth.iter().zip(&ring))
+                .map(|(t, p)| (Point3::new(t.x, t.y, sec.height) - p).norm())
+                .fold(0.0, f64::max)
+        })
+        .reduce(|| 0.0, f64::max)
 }
 
 const AROUND_CANDIDATES: [usize; 16] = [
@@ -590,11 +593,12 @@ pub fn measure_girths(mesh: &TriMesh, targets: &[GirthTarget]) -> Vec<GirthCheck
         return Vec::new();
     };
     let eps = 1e-9 * (b.max.z - b.min.z).max(f64::MIN_POSITIVE);
+    let slicer = Slicer::new(mesh);
     targets
         .iter()
         .map(|t| {
             let h = t.height.clamp(b.min.z + eps, b.max.z - eps);
-            let pts: Vec<Point2> = slice(mesh, h).iter().flat_map(|l| l.xy()).collect();
+            let pts: Vec<Point2> = slicer.slice(h).iter().flat_map(|l| l.xy()).collect();
             let measured = if pts.len() >= 3 {
                 girth(&pts)
             } else {

@@ -19,9 +19,10 @@
 use super::error::FitError;
 use super::section::{centroid, signed_area2, Section};
 use crate::math::Point2;
-use crate::mesh::slice::slice;
+use crate::mesh::slice::Slicer;
 use crate::mesh::transform::Up;
 use crate::mesh::TriMesh;
+use rayon::prelude::*;
 
 /// Where to slice a scan.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -98,10 +99,12 @@ pub fn torso_sections(
     let heights: Vec<f64> = (0..k)
         .map(|i| from + (to - from) * i as f64 / (k - 1) as f64)
         .collect();
+    let slicer = Slicer::new(body);
     let loops: Vec<Vec<Vec<Point2>>> = heights
-        .iter()
+        .par_iter()
         .map(|&h| {
-            slice(body, h)
+            slicer
+                .slice(h)
                 .into_iter()
                 .filter(|l| l.closed && l.points.len() >= 3)
                 .map(|l| l.xy())

@@ -37,15 +37,20 @@ fn key(a: u32, b: u32) -> (u32, u32) {
 /// A mesh edge, its ends in increasing order (see `key`).
 type Edge = (u32, u32);
 
-/// The section of `mesh` by the plane `z = h`.
+/// The section of `mesh` by the plane `z = h` (every face visited; for many planes of one mesh,
+/// [`Slicer`] visits only the faces that reach each).
 pub fn slice(mesh: &TriMesh, h: f64) -> Vec<Loop> {
+    chain(mesh, h, segments(mesh, h, 0..mesh.faces.len() as u32))
+}
+
+/// The loops of the segments `(next, order)` of the section at `h`.
+fn chain(mesh: &TriMesh, h: f64, (next, order): (HashMap<Edge, Edge>, Vec<Edge>)) -> Vec<Loop> {
     let cross = |(a, b): Edge| {
         let (lo, hi) = (a.min(b), a.max(b));
         let (p, q) = (mesh.positions[lo as usize], mesh.positions[hi as usize]);
         let t = (h - p.z) / (q.z - p.z);
         Point3::new(p.x + t * (q.x - p.x), p.y + t * (q.y - p.y), h)
     };
-    let (next, order) = segments(mesh, h);
     // Chain: start open chains at edges nothing leads to, then the closed loops.
     let targets: HashSet<Edge> = next.values().copied().collect();
     let mut used: HashSet<Edge> = HashSet::new();
@@ -69,13 +74,19 @@ pub fn slice(mesh: &TriMesh, h: f64) -> Vec<Loop> {
     loops
 }
 
-/// The segments of the section: from-edge to to-edge (edges as `key`s), and the from-edges in
-/// the order of the faces.
-fn segments(mesh: &TriMesh, h: f64) -> (HashMap<Edge, Edge>, Vec<Edge>) {
+/// The segments of the section through the faces `faces` (in increasing order; the others
+/// must not reach the plane): from-edge to to-edge (edges as `key`s), and the from-edges in the
+/// order of the faces.
+fn segments(
+    mesh: &TriMesh,
+    h: f64,
+    faces: impl Iterator<Item = u32>,
+) -> (HashMap<Edge, Edge>, Vec<Edge>) {
     let above = |v: u32| mesh.positions[v as usize].z >= h;
     let mut next: HashMap<Edge, Edge> = HashMap::new();
     let mut order: Vec<Edge> = Vec::new();
-    for f in &mesh.faces {
+    for fi in faces {
+        let f = &mesh.faces[fi as usize];
         let up: [bool; 3] = f.map(above);
         if up[0] == up[1] && up[1] == up[2] {
             continue;
@@ -97,6 +108,112 @@ fn segments(mesh: &TriMesh, h: f64) -> (HashMap<Edge, Edge>, Vec<Edge>) {
         }
     }
     (next, order)
+}
+
+/// Many sections of one mesh. The faces are sorted once into bands of height (about a face's
+/// mean height each, so a face sits in one or two bands); a section then visits only its
+/// band's faces, in increasing order, and gives the bits [`slice`] gives. Sixty sections of a
+/// 47,000-face body cost a pass over the faces and the faces cut, not sixty passes.
+///
+/// ```
+/// use drapekit::mesh::{generate, slice::{slice, Slicer}};
+/// let m = generate::icosphere(3);
+/// let s = Slicer::new(&m);
+/// for h in [-1.5, -0.99, -0.3, 0.0, 0.42, 1.0, 2.0] {
+///     assert_eq!(s.slice(h), slice(&m, h));
+/// }
+/// ```
+pub struct Slicer<'a> {
+    mesh: &'a TriMesh,
+    /// The lowest vertex's height and the bands' height.
+    lo: f64,
+    band: f64,
+    /// The faces reaching band `b`: `faces[start[b]..start[b + 1]]`, in increasing order.
+    start: Vec<u32>,
+    faces: Vec<u32>,
+}
+
+impl<'a> Slicer<'a> {
+    /// The bands of `mesh`'s faces.
+    pub fn new(mesh: &'a TriMesh) -> Slicer<'a> {
+        let range = |f: &[u32; 3]| {
+            let z = f.map(|v| mesh.positions[v as usize].z);
+            (z[0].min(z[1]).min(z[2]), z[0].max(z[1]).max(z[2]))
+        };
+        let (lo, hi) = (mesh.faces.iter().map(range))
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), (l, h)| {
+                (a.min(l), b.max(h))
+            });
+        let n = mesh.faces.len().max(1);
+        let mean = mesh
+            .faces
+            .iter()
+            .map(|f| range(f).1 - range(f).0)
+            .sum::<f64>()
+            / n as f64;
+        let bands = if hi > lo && mean > 0.0 {
+            ((hi - lo) / mean).clamp(1.0, n as f64) as usize
+        } else {
+            1
+        };
+        let mut s = Slicer {
+            mesh,
+            lo,
+            band: if hi > lo {
+                (hi - lo) / bands as f64
+            } else {
+                1.0
+            },
+            start: vec![0; bands + 1],
+            faces: Vec::new(),
+        };
+        s.fill(bands, range);
+        s
+    }
+
+    /// Band of height `z`, clamped to the bands.
+    fn band_of(&self, z: f64, bands: usize) -> usize {
+        let b = ((z - self.lo) / self.band).floor();
+        if b.is_nan() || b < 0.0 {
+            0
+        } else {
+            (b as usize).min(bands - 1)
+        }
+    }
+
+    /// Counts, then lists each face in every band its heights reach (faces in order).
+    fn fill(&mut self, bands: usize, range: impl Fn(&[u32; 3]) -> (f64, f64)) {
+        let spans: Vec<(usize, usize)> = (self.mesh.faces.iter())
+            .map(|f| {
+                let (l, h) = range(f);
+                (self.band_of(l, bands), self.band_of(h, bands))
+            })
+            .collect();
+        for &(a, b) in &spans {
+            for c in &mut self.start[a + 1..=b + 1] {
+                *c += 1;
+            }
+        }
+        for b in 0..bands {
+            self.start[b + 1] += self.start[b];
+        }
+        let mut at: Vec<u32> = self.start[..bands].to_vec();
+        self.faces = vec![0; self.start[bands] as usize];
+        for (fi, &(a, b)) in spans.iter().enumerate() {
+            for slot in &mut at[a..=b] {
+                self.faces[*slot as usize] = fi as u32;
+                *slot += 1;
+            }
+        }
+    }
+
+    /// The section by the plane `z = h`: what [`slice`] gives, bit for bit.
+    pub fn slice(&self, h: f64) -> Vec<Loop> {
+        let bands = self.start.len() - 1;
+        let b = self.band_of(h, bands);
+        let faces = &self.faces[self.start[b] as usize..self.start[b + 1] as usize];
+        chain(self.mesh, h, segments(self.mesh, h, faces.iter().copied()))
+    }
 }
 
 /// The chain of edges from `s` along `next` (each marked `used`), and whether it closes.
@@ -179,6 +296,38 @@ pub fn girth(points: &[Point2]) -> f64 {
 mod tests {
     use super::*;
     use crate::mesh::generate;
+
+    #[test]
+    fn a_slicer_gives_the_bits_of_a_full_pass_at_every_height() {
+        // A lathed body of bands of very unequal heights (one tall band among short ones, so a
+        // face spans many bands of the slicer) and an icosphere; heights at the vertices
+        // themselves (a face with a corner on the plane), between them, and outside the mesh.
+        let profile: Vec<(f64, f64)> = (0..=40)
+            .map(|i| {
+                let z = if i < 20 {
+                    i as f64 * 0.01
+                } else {
+                    0.2 + (i - 19) as f64 * 0.05
+                };
+                (0.3 + 0.1 * (i as f64 * 0.7).sin(), z)
+            })
+            .collect();
+        for m in [generate::lathe(&profile, 37), generate::icosphere(4)] {
+            let s = Slicer::new(&m);
+            let b = m.bbox().unwrap();
+            let mut heights: Vec<f64> = m.positions.iter().map(|p| p.z).collect();
+            heights.extend(
+                (0..=400).map(|i| b.min.z - 0.1 + (b.max.z - b.min.z + 0.2) * i as f64 / 400.0),
+            );
+            let mut cut = 0;
+            for h in heights {
+                let (a, full) = (s.slice(h), slice(&m, h));
+                assert_eq!(a, full, "h = {h}");
+                cut += full.len();
+            }
+            assert!(cut > 400, "the heights cut the mesh ({cut} loops)");
+        }
+    }
 
     #[test]
     fn sphere_section_is_one_ccw_circle() {
