@@ -374,23 +374,36 @@ fn draw_panel(
     let (w, h) = (cam.size[0] as usize, cam.size[1] as usize);
     let buf = raster::rasterise(&tris, w, h);
     let light = shade::light(&cam.right, &cam.up, &cam.forward);
-    let mut out = vec![None; w * h];
+    shade_pixels(&buf, w, |frag, x, y| {
+        let t = frag.triangle as usize;
+        let i = starts.partition_point(|&s| s <= t) - 1;
+        let bary = raster::barycentric(&tris[t], x, y);
+        shade_fragment(
+            &items[i],
+            &normals[i],
+            t - starts[i],
+            &bary,
+            cam,
+            &light,
+            opts,
+        )
+    })
+}
+
+/// The picture of `buf` (`w` pixels a row): `shade(fragment, x, y)` at each covered pixel,
+/// row by row in parallel.
+fn shade_pixels<F>(buf: &[raster::Fragment], w: usize, shade: F) -> Vec<Option<Rgb>>
+where
+    F: Fn(&raster::Fragment, usize, usize) -> Rgb + Sync,
+{
+    let mut out = vec![None; buf.len()];
     out.par_chunks_mut(w)
         .zip(buf.par_chunks(w))
-        .for_each(|(row, frags)| {
-            for (px, frag) in row.iter_mut().zip(frags) {
+        .enumerate()
+        .for_each(|(y, (row, frags))| {
+            for (x, (px, frag)) in row.iter_mut().zip(frags).enumerate() {
                 if frag.is_covered() {
-                    let t = frag.triangle as usize;
-                    let i = starts.partition_point(|&s| s <= t) - 1;
-                    *px = Some(shade_fragment(
-                        &items[i],
-                        &normals[i],
-                        t - starts[i],
-                        frag,
-                        cam,
-                        &light,
-                        opts,
-                    ));
+                    *px = Some(shade(frag, x, y));
                 }
             }
         });
@@ -402,20 +415,17 @@ fn shade_fragment(
     item: &Item,
     normals: &Normals,
     f: usize,
-    frag: &raster::Fragment,
+    bary: &[f64; 3],
     cam: &Camera,
     light: &Vec3,
     opts: &RenderOptions,
 ) -> Rgb {
     let face = item.mesh.faces[f];
-    let interp = |v: &dyn Fn(usize) -> f64| {
-        (0..3)
-            .map(|k| frag.bary[k] * v(face[k] as usize))
-            .sum::<f64>()
-    };
+    let interp =
+        |v: &dyn Fn(usize) -> f64| (0..3).map(|k| bary[k] * v(face[k] as usize)).sum::<f64>();
     let nf = normals.face[f];
     let n = match &normals.vertex {
-        Some(vn) => (0..3).map(|k| vn[face[k] as usize] * frag.bary[k]).sum(),
+        Some(vn) => (0..3).map(|k| vn[face[k] as usize] * bary[k]).sum(),
         None => nf,
     };
     let b = shade::brightness(&n, &nf, &cam.forward, light);
