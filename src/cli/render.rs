@@ -520,50 +520,89 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     let folder = args.output.parent().filter(|p| !p.as_os_str().is_empty());
     super::remove_stale_temps(&[folder.unwrap_or(Path::new("."))]);
     let body = body(&args, &job)?;
-    let values: Vec<Vec<Option<Vec<f64>>>> = job
-        .frames
-        .iter()
-        .map(|f| {
-            f.iter()
-                .map(|c| values(c, args.color, body.as_ref(), args.contact_distance))
-                .collect()
-        })
-        .collect::<anyhow::Result<_>>()?;
+    let values = frame_values(&args, &job, body.as_ref())?;
     let value_range = value_range(&values);
     let scale_range = args
         .range
         .or(value_range)
         .filter(|_| args.color != Quantity::Contact);
     let opts = options(&args, scale_range);
-    let all_points = || {
-        job.frames
-            .iter()
-            .flatten()
-            .chain(&job.objects)
-            .flat_map(|l| l.mesh.positions.iter())
-    };
-    let framing = render::frame(&opts, all_points)?;
+    let framing = render::frame(&opts, || all_points(&job))?;
     let lift = args
         .cloth_lift
-        .unwrap_or_else(|| render::default_lift(all_points()));
-    let colour = |k: usize, default: Rgb| args.mesh_colors.get(k).copied().unwrap_or(default);
-    let items = |k: usize| -> Vec<Item> {
-        let cloth = job.frames[k].iter().zip(&values[k]);
-        cloth
-            .map(|(c, v)| Item::cloth(&c.mesh, colour(0, CLOTH), v.as_deref(), lift))
-            .chain(
-                job.objects
-                    .iter()
-                    .enumerate()
-                    .map(|(k, o)| Item::object(&o.mesh, colour(k + 1, OBJECT))),
-            )
-            .collect()
-    };
+        .unwrap_or_else(|| render::default_lift(all_points(&job)));
+    let items = |k: usize| frame_items(&args, &job, &values[k], k, lift);
     for k in 0..job.frames.len() {
         render::check(&items(k))?;
     }
     write_pictures(&args, &job, |k| render::render(&items(k), &framing, &opts))?;
-    let report = RenderReport {
+    let ranges = [value_range, scale_range];
+    let report = render_report(&args, &job, framing.cameras[0].scale, ranges);
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        print_summary(&report);
+    }
+    Ok(())
+}
+
+/// Per-vertex values of each frame's cloth meshes (`None` for `plain`).
+type FrameValues = Vec<Vec<Option<Vec<f64>>>>;
+
+/// The values of every frame's cloth meshes, frame by frame.
+fn frame_values(
+    args: &RenderArgs,
+    job: &Job,
+    body: Option<&TriMesh>,
+) -> anyhow::Result<FrameValues> {
+    job.frames
+        .iter()
+        .map(|f| {
+            f.iter()
+                .map(|c| values(c, args.color, body, args.contact_distance))
+                .collect()
+        })
+        .collect()
+}
+
+/// Every point of every frame and object (what the camera and the lift are fitted to).
+fn all_points(job: &Job) -> impl Iterator<Item = &crate::math::Point3> {
+    job.frames
+        .iter()
+        .flatten()
+        .chain(&job.objects)
+        .flat_map(|l| l.mesh.positions.iter())
+}
+
+/// Frame `k`'s items: its cloth meshes (coloured by `values`, lifted), then the objects.
+fn frame_items<'a>(
+    args: &RenderArgs,
+    job: &'a Job,
+    values: &'a [Option<Vec<f64>>],
+    k: usize,
+    lift: f64,
+) -> Vec<Item<'a>> {
+    let colour = |k: usize, default: Rgb| args.mesh_colors.get(k).copied().unwrap_or(default);
+    let cloth = job.frames[k].iter().zip(values);
+    cloth
+        .map(|(c, v)| Item::cloth(&c.mesh, colour(0, CLOTH), v.as_deref(), lift))
+        .chain(
+            job.objects
+                .iter()
+                .enumerate()
+                .map(|(k, o)| Item::object(&o.mesh, colour(k + 1, OBJECT))),
+        )
+        .collect()
+}
+
+/// The report of a job drawn at `pixels_per_unit`; `ranges`: the values' and the scale's.
+fn render_report(
+    args: &RenderArgs,
+    job: &Job,
+    pixels_per_unit: f64,
+    [value_range, scale_range]: [Option<[f64; 2]>; 2],
+) -> RenderReport {
+    RenderReport {
         output: args.output.display().to_string(),
         format: match (job.encoding, job.animated) {
             (Encoding::Gif, _) => "gif",
@@ -575,7 +614,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         height: args.height,
         frames: job.frames.len(),
         view: view_name(args.view),
-        pixels_per_unit: framing.cameras[0].scale,
+        pixels_per_unit,
         color: args.color,
         value_range,
         scale_range,
@@ -590,13 +629,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
                 cloth,
             })
             .collect(),
-    };
-    if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
-    } else {
-        print_summary(&report);
     }
-    Ok(())
 }
 
 fn view_name(l: Layout) -> String {
