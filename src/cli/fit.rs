@@ -6,6 +6,7 @@ use crate::fit::{input, measurements, FitError};
 use crate::io::{self, Format, ReadOptions, WriteOptions};
 use crate::mesh::prepare::{prepare, PrepareOptions};
 use crate::mesh::transform::{change_up, scale, Units, Up};
+use crate::mesh::TriMesh;
 use clap::{ArgGroup, Args};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -351,7 +352,44 @@ pub fn run(args: FitArgs) -> anyhow::Result<()> {
         ascii: args.ascii,
     };
     check_args(&args, &wopts)?;
-    let src = load(&args)?;
+    let mut src = load(&args)?;
+    let out_units = args.to_units.unwrap_or(src.units);
+    let out_up = args.to_up.unwrap_or(src.up);
+    let (mesh, fit) = fit_form(&args, &mut src, out_units, out_up)?;
+    let inputs = [src.path.as_path()];
+    let preview = write_form(&args, &mesh, &wopts, out_up, &inputs)?;
+    let report = FitCliReport {
+        input: src.path.display().to_string(),
+        source: src.kind,
+        measurement_format: src.format,
+        notes: src.notes,
+        output: args.output.display().to_string(),
+        units: src.units,
+        output_units: out_units,
+        output_up: out_up,
+        band: src.band,
+        fit,
+        wall_seconds: start.elapsed().as_secs_f64(),
+        preview,
+    };
+    super::finish(
+        &report,
+        args.report.as_deref(),
+        &inputs,
+        &args.output,
+        args.json,
+        |r| print_summary(r, &args.output),
+    )
+}
+
+/// The form fitted to the source's sections (taken from it), scaled to `units` and turned to
+/// `up`; the fit's report.
+fn fit_form(
+    args: &FitArgs,
+    src: &mut Source,
+    units: Units,
+    up: Up,
+) -> anyhow::Result<(TriMesh, FitReport)> {
     let tolerance = args
         .tolerance
         .map(|(v, u)| v * u.map_or(1.0, |u| Units::factor(u, src.units)));
@@ -364,54 +402,36 @@ pub fn run(args: FitArgs) -> anyhow::Result<()> {
         caps: !args.open,
         tolerance,
     };
-    let fitted =
-        fit_sections(src.sections, &src.targets, &opts).map_err(|e| e.in_file(&src.path))?;
+    let sections = std::mem::take(&mut src.sections);
+    let fitted = fit_sections(sections, &src.targets, &opts).map_err(|e| e.in_file(&src.path))?;
     let mut mesh = fitted.mesh;
-    let out_units = args.to_units.unwrap_or(src.units);
-    scale(&mut mesh, Units::factor(src.units, out_units));
-    let out_up = args.to_up.unwrap_or(src.up);
-    change_up(&mut mesh, Up::Z, out_up);
-    let inputs = [src.path.as_path()];
-    let (staged, _) = io::stage_mesh(&args.output, &mesh, &wopts, &inputs)?;
+    scale(&mut mesh, Units::factor(src.units, units));
+    change_up(&mut mesh, Up::Z, up);
+    Ok((mesh, fitted.report))
+}
+
+/// Writes the form and, with `--preview`, its picture from the front (committed together);
+/// the preview's path.
+fn write_form(
+    args: &FitArgs,
+    mesh: &TriMesh,
+    wopts: &WriteOptions,
+    up: Up,
+    inputs: &[&Path],
+) -> anyhow::Result<Option<String>> {
+    let (staged, _) = io::stage_mesh(&args.output, mesh, wopts, inputs)?;
     let mut staged = vec![staged];
     let preview = if args.preview {
         let p = super::render::preview_path(&args.output);
-        let item = crate::render::Item::object(&mesh, super::render::OBJECT);
+        let item = crate::render::Item::object(mesh, super::render::OBJECT);
         let view = crate::render::View::Front;
-        staged.push(super::render::stage_preview(
-            &p,
-            &[item],
-            view,
-            out_up,
-            &inputs,
-        )?);
+        staged.push(super::render::stage_preview(&p, &[item], view, up, inputs)?);
         Some(p.display().to_string())
     } else {
         None
     };
     io::commit(staged)?;
-    let report = FitCliReport {
-        input: src.path.display().to_string(),
-        source: src.kind,
-        measurement_format: src.format,
-        notes: src.notes,
-        output: args.output.display().to_string(),
-        units: src.units,
-        output_units: out_units,
-        output_up: out_up,
-        band: src.band,
-        fit: fitted.report,
-        wall_seconds: start.elapsed().as_secs_f64(),
-        preview,
-    };
-    super::finish(
-        &report,
-        args.report.as_deref(),
-        &inputs,
-        &args.output,
-        args.json,
-        |r| print_summary(r, &args.output),
-    )
+    Ok(preview)
 }
 
 fn print_summary(r: &FitCliReport, out: &Path) {
