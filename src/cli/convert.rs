@@ -170,6 +170,90 @@ fn idle_flags(args: &ConvertArgs, out_format: Format) -> Vec<String> {
     w
 }
 
+/// Reads the input and prepares it; refuses a mesh with no faces, as read or as prepared.
+fn read_and_prepare(
+    args: &ConvertArgs,
+    opts: &PrepareOptions,
+) -> anyhow::Result<(TriMesh, ReadInfo, PrepareReport)> {
+    let read = io::read_mesh(&args.input, &args.read.options())?;
+    if read.mesh.faces.is_empty() {
+        bail!(
+            "{}: no faces to convert ({} vertices, 0 faces): a point cloud or an empty mesh",
+            args.input.display(),
+            read.mesh.positions.len()
+        );
+    }
+    let mut mesh = read.mesh;
+    let prep = prepare(&mut mesh, opts);
+    if mesh.faces.is_empty() {
+        bail!(
+            "{}: every face was degenerate or duplicate; nothing is left to write",
+            args.input.display()
+        );
+    }
+    Ok((mesh, read.info, prep))
+}
+
+/// Writes the output mesh and, with `--preview`, its picture (committed together); the
+/// preview's path.
+fn write_outputs(
+    args: &ConvertArgs,
+    mesh: &TriMesh,
+    wopts: &WriteOptions,
+    inputs: &[&Path],
+) -> anyhow::Result<Option<String>> {
+    let (staged, _) = io::stage_mesh(&args.output, mesh, wopts, inputs)?;
+    let mut staged = vec![staged];
+    let preview = if args.preview {
+        let up = args.to_up.or(args.up).unwrap_or(Up::Z);
+        let p = super::render::preview_path(&args.output);
+        staged.push(stage_preview(&p, &args.output, mesh, up, inputs)?);
+        Some(p.display().to_string())
+    } else {
+        None
+    };
+    io::commit(staged)?;
+    Ok(preview)
+}
+
+/// The report of a conversion that began at `start`.
+fn convert_report(
+    args: &ConvertArgs,
+    out_format: Format,
+    info: ReadInfo,
+    prep: PrepareReport,
+    start: Instant,
+    preview: Option<String>,
+) -> ConvertReport {
+    ConvertReport {
+        input: args.input.display().to_string(),
+        output: args.output.display().to_string(),
+        input_format: info.format.clone(),
+        output_format: out_format,
+        input_faces: info.polygons.polygons,
+        input_triangles: prep.input_faces,
+        input_vertices: prep.input_vertices,
+        output_faces: prep.output_faces,
+        output_vertices: prep.output_vertices,
+        welded_vertices: prep.welded_vertices,
+        degenerate_faces: prep.degenerate_faces,
+        duplicate_faces: prep.duplicate_faces,
+        flipped_faces: prep.flipped_faces,
+        split_vertices: prep.split_vertices,
+        quads: info.polygons.quads,
+        nonplanar_quads: info.polygons.nonplanar_quads,
+        components: prep.after.components,
+        closed_components: prep.after.closed_components,
+        open_components: prep.after.open_components,
+        non_manifold_edges: prep.after.non_manifold_edges,
+        shell_state: prep.after.shell_state,
+        wall_seconds: start.elapsed().as_secs_f64(),
+        preview,
+        read: info,
+        prepare: prep,
+    }
+}
+
 /// Runs `drapekit convert`.
 pub fn run(args: ConvertArgs) -> anyhow::Result<()> {
     let start = Instant::now();
@@ -185,61 +269,10 @@ pub fn run(args: ConvertArgs) -> anyhow::Result<()> {
             bail!("--report {} is the output mesh path", r.display());
         }
     }
-    let read = io::read_mesh(&args.input, &args.read.options())?;
-    if read.mesh.faces.is_empty() {
-        bail!(
-            "{}: no faces to convert ({} vertices, 0 faces): a point cloud or an empty mesh",
-            args.input.display(),
-            read.mesh.positions.len()
-        );
-    }
-    let mut mesh = read.mesh;
-    let prep = prepare(&mut mesh, &opts);
-    if mesh.faces.is_empty() {
-        bail!(
-            "{}: every face was degenerate or duplicate; nothing is left to write",
-            args.input.display()
-        );
-    }
+    let (mesh, info, prep) = read_and_prepare(&args, &opts)?;
     let inputs = [args.input.as_path()];
-    let (staged, _) = io::stage_mesh(&args.output, &mesh, &wopts, &inputs)?;
-    let mut staged = vec![staged];
-    let preview = if args.preview {
-        let up = args.to_up.or(args.up).unwrap_or(Up::Z);
-        let p = super::render::preview_path(&args.output);
-        staged.push(stage_preview(&p, &args.output, &mesh, up, &inputs)?);
-        Some(p.display().to_string())
-    } else {
-        None
-    };
-    io::commit(staged)?;
-    let report = ConvertReport {
-        input: args.input.display().to_string(),
-        output: args.output.display().to_string(),
-        input_format: read.info.format.clone(),
-        output_format: out_format,
-        input_faces: read.info.polygons.polygons,
-        input_triangles: prep.input_faces,
-        input_vertices: prep.input_vertices,
-        output_faces: prep.output_faces,
-        output_vertices: prep.output_vertices,
-        welded_vertices: prep.welded_vertices,
-        degenerate_faces: prep.degenerate_faces,
-        duplicate_faces: prep.duplicate_faces,
-        flipped_faces: prep.flipped_faces,
-        split_vertices: prep.split_vertices,
-        quads: read.info.polygons.quads,
-        nonplanar_quads: read.info.polygons.nonplanar_quads,
-        components: prep.after.components,
-        closed_components: prep.after.closed_components,
-        open_components: prep.after.open_components,
-        non_manifold_edges: prep.after.non_manifold_edges,
-        shell_state: prep.after.shell_state,
-        wall_seconds: start.elapsed().as_secs_f64(),
-        preview,
-        read: read.info,
-        prepare: prep,
-    };
+    let preview = write_outputs(&args, &mesh, &wopts, &inputs)?;
+    let report = convert_report(&args, out_format, info, prep, start, preview);
     super::finish(
         &report,
         args.report.as_deref(),
