@@ -179,47 +179,63 @@ fn units_agree(p: &Path, file: Option<Units>, flag: Option<Units>) -> Result<(),
     }
 }
 
+/// The source the flags name: a sections file, a measurement set, or a scanned body.
 fn load(args: &FitArgs) -> Result<Source, FitError> {
     if let Some(p) = &args.sections {
-        let f = input::read(p)?;
-        units_agree(p, f.units, args.units)?;
-        let units = f.units.or(args.units).unwrap_or(Units::M);
-        let mut targets = section_targets(&f.sections, "section");
-        for (t, n) in targets.iter_mut().zip(&f.names) {
-            if let Some(n) = n {
-                t.name = n.clone();
-            }
-        }
-        return Ok(Source {
-            path: p.clone(),
-            kind: "sections",
-            format: None,
-            notes: Vec::new(),
-            sections: f.sections,
-            targets,
-            units,
-            up: Up::Z,
-            band: None,
-        });
+        return from_sections(args, p);
     }
     if let Some(p) = &args.measurements {
-        let imported = crate::fit::foreign::read_any(p)?;
-        let m = &imported.measurements;
-        let (sections, targets, units) = measurements::sections(m, p, args.levels.unwrap_or(41))?;
-        units_agree(p, Some(units), args.units)?;
-        return Ok(Source {
-            path: p.clone(),
-            kind: "measurements",
-            format: Some(imported.format),
-            notes: imported.notes,
-            sections,
-            targets,
-            units,
-            up: Up::Z,
-            band: None,
-        });
+        return from_measurements(args, p);
     }
     let p = args.from_mesh.as_ref().expect("clap requires one source");
+    from_scan(args, p)
+}
+
+/// A sections file (`--sections`): its sections, each a girth target under its name.
+fn from_sections(args: &FitArgs, p: &Path) -> Result<Source, FitError> {
+    let f = input::read(p)?;
+    units_agree(p, f.units, args.units)?;
+    let units = f.units.or(args.units).unwrap_or(Units::M);
+    let mut targets = section_targets(&f.sections, "section");
+    for (t, n) in targets.iter_mut().zip(&f.names) {
+        if let Some(n) = n {
+            t.name = n.clone();
+        }
+    }
+    Ok(Source {
+        path: p.to_path_buf(),
+        kind: "sections",
+        format: None,
+        notes: Vec::new(),
+        sections: f.sections,
+        targets,
+        units,
+        up: Up::Z,
+        band: None,
+    })
+}
+
+/// A measurement set (`--measurements`, any format read): the shape model's sections.
+fn from_measurements(args: &FitArgs, p: &Path) -> Result<Source, FitError> {
+    let imported = crate::fit::foreign::read_any(p)?;
+    let m = &imported.measurements;
+    let (sections, targets, units) = measurements::sections(m, p, args.levels.unwrap_or(41))?;
+    units_agree(p, Some(units), args.units)?;
+    Ok(Source {
+        path: p.to_path_buf(),
+        kind: "measurements",
+        format: Some(imported.format),
+        notes: imported.notes,
+        sections,
+        targets,
+        units,
+        up: Up::Z,
+        band: None,
+    })
+}
+
+/// A scanned body (`--from-mesh`): prepared, turned z-up, its torso sliced.
+fn from_scan(args: &FitArgs, p: &Path) -> Result<Source, FitError> {
     let mut body = io::read_mesh(p, &ReadOptions::default())?.mesh;
     if body.faces.is_empty() {
         return Err(FitError::Options(format!(
@@ -244,7 +260,7 @@ fn load(args: &FitArgs) -> Result<Source, FitError> {
     let (sections, (from, to)) = torso_sections(&body, &opts).map_err(|e| e.in_file(p))?;
     let targets = section_targets(&sections, "level");
     Ok(Source {
-        path: p.clone(),
+        path: p.to_path_buf(),
         kind: "scan",
         format: None,
         notes: Vec::new(),
