@@ -468,6 +468,25 @@ fn print_summary(r: &FitCliReport, out: &Path) {
         "  nodes: {} along x {} around, Lanczos order {}",
         f.nodes_along, f.nodes_around, f.lanczos
     );
+    print_error(r);
+    print_girths(f);
+    println!(
+        "  largest girth deviation {:.3}% over {} levels; {:.3} s",
+        100.0 * f.max_girth_deviation,
+        f.girths.len(),
+        r.wall_seconds
+    );
+    for n in &r.notes {
+        println!("  note: {n}");
+    }
+    for w in &f.warnings {
+        println!("  warning: {w}");
+    }
+}
+
+/// The estimated error, and the choice `--tolerance` made.
+fn print_error(r: &FitCliReport) {
+    let f = &r.fit;
     let e = &f.estimated_error;
     match e.total {
         Some(t) => println!(
@@ -493,6 +512,10 @@ fn print_summary(r: &FitCliReport, out: &Path) {
             if c.met { "met" } else { "NOT met" }
         );
     }
+}
+
+/// The girths of named levels (a measurement set's), requested against measured.
+fn print_girths(f: &FitReport) {
     let named: Vec<_> = f
         .girths
         .iter()
@@ -507,17 +530,5 @@ fn print_summary(r: &FitCliReport, out: &Path) {
             g.measured,
             100.0 * g.deviation
         );
-    }
-    println!(
-        "  largest girth deviation {:.3}% over {} levels; {:.3} s",
-        100.0 * f.max_girth_deviation,
-        f.girths.len(),
-        r.wall_seconds
-    );
-    for n in &r.notes {
-        println!("  note: {n}");
-    }
-    for w in &f.warnings {
-        println!("  warning: {w}");
     }
 }
