@@ -64,6 +64,12 @@ pub fn run(args: InspectArgs) -> anyhow::Result<()> {
         println!("{}", serde_json::to_string_pretty(&report)?);
         return Ok(());
     }
+    print_summary(&report);
+    Ok(())
+}
+
+/// The report as lines of text.
+fn print_summary(report: &InspectReport) {
     let d = &report.diagnosis;
     println!("{} ({})", report.file, report.read.format);
     println!(
@@ -96,6 +102,15 @@ pub fn run(args: InspectArgs) -> anyhow::Result<()> {
         "  winding consistent: {}, outward: {}, watertight: {}, Euler characteristic {}",
         d.winding_consistent, d.outward, d.watertight, d.euler_characteristic
     );
+    print_volumes(d);
+    println!("  shell state: {}", d.shell_state);
+    for w in &report.read.warnings {
+        println!("  note: {w}");
+    }
+}
+
+/// The closed volumes (the first 8, and how many in all), if any.
+fn print_volumes(d: &Diagnosis) {
     if !d.volumes.is_empty() {
         let shown: Vec<String> = d.volumes.iter().take(8).map(|v| six(v.volume)).collect();
         let more = if d.volumes.len() > 8 {
@@ -110,9 +125,4 @@ pub fn run(args: InspectArgs) -> anyhow::Result<()> {
             six(d.total_volume)
         );
     }
-    println!("  shell state: {}", d.shell_state);
-    for w in &report.read.warnings {
-        println!("  note: {w}");
-    }
-    Ok(())
 }
