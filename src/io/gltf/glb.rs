@@ -25,55 +25,20 @@ fn u32_at(bytes: &[u8], at: usize) -> u32 {
     u32::from_le_bytes(bytes[at..at + 4].try_into().expect("4 bytes"))
 }
 
+/// A problem of the binary glTF at `path`, at byte `offset` of `record`.
+fn problem(path: &Path, offset: u64, record: &str, kind: ProblemKind) -> IoError {
+    let at = Location::Byte {
+        offset,
+        record: record.into(),
+    };
+    malformed(path, "binary glTF", at, kind)
+}
+
 /// Splits a binary glTF into its chunks, checking the header against the file's size.
 pub fn split<'a>(path: &Path, bytes: &'a [u8]) -> Result<Chunks<'a>, IoError> {
-    let err = |offset: u64, record: &str, kind| {
-        let at = Location::Byte {
-            offset,
-            record: record.into(),
-        };
-        malformed(path, "binary glTF", at, kind)
-    };
-    let size = bytes.len() as u64;
-    if !bytes.starts_with(MAGIC) {
-        let head = &bytes[..bytes.len().min(4)];
-        let found = format!("{:?}", String::from_utf8_lossy(head));
-        return Err(err(0, "magic", ProblemKind::GlbMagic { found }));
-    }
-    if bytes.len() < 12 {
-        let what = "the 12-byte header".into();
-        return Err(err(0, "header", truncated(what, 12, size)));
-    }
-    let version = u32_at(bytes, 4);
-    if version != 2 {
-        return Err(err(4, "version", ProblemKind::GlbVersion { version }));
-    }
-    let declared = u64::from(u32_at(bytes, 8));
-    if declared != size {
-        let what = "the file, by the header's length field,".to_string();
-        return Err(err(8, "length", truncated(what, declared, size)));
-    }
-    let mut chunks = Vec::new();
-    let mut at = 12usize;
-    while at < bytes.len() {
-        let i = chunks.len();
-        if bytes.len() - at < 8 {
-            let what = format!("chunk {i}'s 8-byte header at byte {at}");
-            return Err(err(
-                at as u64,
-                "chunk",
-                truncated(what, at as u64 + 8, size),
-            ));
-        }
-        let (len, ty) = (u32_at(bytes, at) as usize, u32_at(bytes, at + 4));
-        let end = at as u64 + 8 + len as u64;
-        if end > size {
-            let what = format!("chunk {i} of {len} bytes at byte {at}");
-            return Err(err(at as u64, "chunk", truncated(what, end, size)));
-        }
-        chunks.push((ty, &bytes[at + 8..end as usize], at));
-        at = end as usize;
-    }
+    check_header(path, bytes)?;
+    let chunks = chunk_list(path, bytes)?;
+    let err = |offset: u64, record: &str, kind| problem(path, offset, record, kind);
     match chunks.first() {
         Some(&(JSON, json, _)) => Ok(Chunks {
             json,
@@ -95,6 +60,62 @@ pub fn split<'a>(path: &Path, bytes: &'a [u8]) -> Result<Chunks<'a>, IoError> {
             },
         )),
     }
+}
+
+/// The 12-byte header: the magic, version 2, and a length that is the file's size.
+fn check_header(path: &Path, bytes: &[u8]) -> Result<(), IoError> {
+    let err = |offset: u64, record: &str, kind| problem(path, offset, record, kind);
+    let size = bytes.len() as u64;
+    if !bytes.starts_with(MAGIC) {
+        let head = &bytes[..bytes.len().min(4)];
+        let found = format!("{:?}", String::from_utf8_lossy(head));
+        return Err(err(0, "magic", ProblemKind::GlbMagic { found }));
+    }
+    if bytes.len() < 12 {
+        let what = "the 12-byte header".into();
+        return Err(err(0, "header", truncated(what, 12, size)));
+    }
+    let version = u32_at(bytes, 4);
+    if version != 2 {
+        return Err(err(4, "version", ProblemKind::GlbVersion { version }));
+    }
+    let declared = u64::from(u32_at(bytes, 8));
+    if declared != size {
+        let what = "the file, by the header's length field,".to_string();
+        return Err(err(8, "length", truncated(what, declared, size)));
+    }
+    Ok(())
+}
+
+/// A chunk: its type, its data, and its offset in the file.
+type Chunk<'a> = (u32, &'a [u8], usize);
+
+/// The chunks after the header, in order, every one checked to end within the file.
+fn chunk_list<'a>(path: &Path, bytes: &'a [u8]) -> Result<Vec<Chunk<'a>>, IoError> {
+    let err = |offset: u64, record: &str, kind| problem(path, offset, record, kind);
+    let size = bytes.len() as u64;
+    let mut chunks = Vec::new();
+    let mut at = 12usize;
+    while at < bytes.len() {
+        let i = chunks.len();
+        if bytes.len() - at < 8 {
+            let what = format!("chunk {i}'s 8-byte header at byte {at}");
+            return Err(err(
+                at as u64,
+                "chunk",
+                truncated(what, at as u64 + 8, size),
+            ));
+        }
+        let (len, ty) = (u32_at(bytes, at) as usize, u32_at(bytes, at + 4));
+        let end = at as u64 + 8 + len as u64;
+        if end > size {
+            let what = format!("chunk {i} of {len} bytes at byte {at}");
+            return Err(err(at as u64, "chunk", truncated(what, end, size)));
+        }
+        chunks.push((ty, &bytes[at + 8..end as usize], at));
+        at = end as usize;
+    }
+    Ok(chunks)
 }
 
 fn truncated(what: String, needed: u64, size: u64) -> ProblemKind {
