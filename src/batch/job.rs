@@ -97,27 +97,7 @@ fn execute(plan: &Plan, job: &Job, ctx: &JobContext) -> Result<Finished, BatchEr
     cmd.arg("--jobs").arg(ctx.threads.to_string());
     match &plan.garments[job.garment].kind {
         GarmentKind::Scene { file, body_object } => {
-            let changes = SceneChanges {
-                body: job
-                    .body
-                    .map(|b| body::mesh(&plan.bodies[b], &ctx.out, &ctx.exe))
-                    .transpose()?,
-                scale: job.size.map(|s| plan.sizes[s].scale),
-                object: if job.body.is_some() || job.size.is_some() {
-                    super::plan::scene_object(file, body_object.as_deref()).map_err(|message| {
-                        BatchError::Child {
-                            what: "the scene".into(),
-                            message,
-                        }
-                    })?
-                } else {
-                    0
-                },
-                fabric: job.fabric.map(|f| {
-                    let c = &plan.fabrics[f];
-                    (c.name.as_str(), c.table.as_ref())
-                }),
-            };
+            let changes = scene_changes(plan, job, ctx, file, body_object.as_deref())?;
             let text = derive::scene(plan, file, &changes)?;
             let scene = dir.join("scene.toml");
             crate::io::write_atomic(&scene, &[file], |w| {
@@ -126,28 +106,7 @@ fn execute(plan: &Plan, job: &Job, ctx: &JobContext) -> Result<Finished, BatchEr
             cmd.arg("drape").arg(&scene);
         }
         GarmentKind::Pattern { file, spacing } => {
-            let b = &plan.bodies[job
-                .body
-                .expect("a pattern job has a body (checked by the plan)")];
-            let size = job
-                .size
-                .map(|s| (plan.sizes[s].name.as_str(), plan.sizes[s].scale));
-            let body_file = body::for_pattern(b, size, &ctx.out, &ctx.exe)?;
-            let g = &plan.garment_solver;
-            cmd.arg("garment").arg(file).arg("--body").arg(body_file);
-            cmd.args(["--spacing", &spacing.to_string()]);
-            cmd.args([
-                "--sew-max",
-                &g.sew_max.to_string(),
-                "--settle-max",
-                &g.settle_max.to_string(),
-            ]);
-            if let Some(f) = job.fabric {
-                cmd.args(["--fabric", &plan.fabrics[f].name]);
-            }
-            if let Some(i) = &g.integrator {
-                cmd.args(["--integrator", i]);
-            }
+            pattern_args(&mut cmd, plan, job, ctx, file, *spacing)?;
         }
     }
     cmd.arg("-o").arg(&outputs).arg("--report").arg(&report);
@@ -158,6 +117,71 @@ fn execute(plan: &Plan, job: &Job, ctx: &JobContext) -> Result<Finished, BatchEr
         report: rel(&ctx.out, &report),
         mesh: mesh.map(|m| rel(&ctx.out, Path::new(&m))),
     })
+}
+
+/// What a scene job changes in the scene `file`: the body (fitted or cached first), the
+/// size's scale, the object they apply to, the fabric.
+fn scene_changes<'a>(
+    plan: &'a Plan,
+    job: &Job,
+    ctx: &JobContext,
+    file: &Path,
+    body_object: Option<&str>,
+) -> Result<SceneChanges<'a>, BatchError> {
+    Ok(SceneChanges {
+        body: job
+            .body
+            .map(|b| body::mesh(&plan.bodies[b], &ctx.out, &ctx.exe))
+            .transpose()?,
+        scale: job.size.map(|s| plan.sizes[s].scale),
+        object: if job.body.is_some() || job.size.is_some() {
+            super::plan::scene_object(file, body_object).map_err(|message| BatchError::Child {
+                what: "the scene".into(),
+                message,
+            })?
+        } else {
+            0
+        },
+        fabric: job.fabric.map(|f| {
+            let c = &plan.fabrics[f];
+            (c.name.as_str(), c.table.as_ref())
+        }),
+    })
+}
+
+/// A pattern job's `garment` arguments: the pattern, the body (scaled to the size), the
+/// spacing, the plan's garment solver and the fabric.
+fn pattern_args(
+    cmd: &mut Command,
+    plan: &Plan,
+    job: &Job,
+    ctx: &JobContext,
+    file: &Path,
+    spacing: f64,
+) -> Result<(), BatchError> {
+    let b = &plan.bodies[job
+        .body
+        .expect("a pattern job has a body (checked by the plan)")];
+    let size = job
+        .size
+        .map(|s| (plan.sizes[s].name.as_str(), plan.sizes[s].scale));
+    let body_file = body::for_pattern(b, size, &ctx.out, &ctx.exe)?;
+    let g = &plan.garment_solver;
+    cmd.arg("garment").arg(file).arg("--body").arg(body_file);
+    cmd.args(["--spacing", &spacing.to_string()]);
+    cmd.args([
+        "--sew-max",
+        &g.sew_max.to_string(),
+        "--settle-max",
+        &g.settle_max.to_string(),
+    ]);
+    if let Some(f) = job.fabric {
+        cmd.args(["--fabric", &plan.fabrics[f].name]);
+    }
+    if let Some(i) = &g.integrator {
+        cmd.args(["--integrator", i]);
+    }
+    Ok(())
 }
 
 /// Runs `cmd` with its output into `log`, killing it after `minutes`; its wall time on success.
