@@ -21,7 +21,7 @@ use crate::garment::drape::{self as gd, GarmentSettings};
 use crate::garment::hang::{compare, HangDifference, RingHang};
 use anyhow::Context;
 use serde::Serialize;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// Arguments of `drapekit bench garment`.
@@ -143,6 +143,31 @@ pub fn run(a: GarmentBench) -> anyhow::Result<()> {
         .realdata
         .clone()
         .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/realdata"));
+    let mut sweep = sweep(&a)?;
+    let keep = |p: &str, b: &str| {
+        a.only
+            .as_ref()
+            .is_none_or(|o| p.contains(o) || b.contains(o))
+    };
+    let mut rows = Vec::new();
+    for (p, b) in RUNS.into_iter().filter(|(p, b)| keep(p, b)) {
+        bench_pair(&a, &dir, (p, b), &mut sweep, &mut rows)?;
+    }
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&rows)?);
+    }
+    Ok(())
+}
+
+/// What the flags ask for: the settings every run starts from, the spacings, the sew spacings.
+struct Sweep {
+    settings: GarmentSettings,
+    spacings: Vec<f64>,
+    sew_spacings: Vec<Option<f64>>,
+}
+
+/// Checks the flags, in order, into the sweep.
+fn sweep(a: &GarmentBench) -> anyhow::Result<Sweep> {
     let fabric = Fabric::preset(&a.fabric).with_context(|| format!("--fabric {}", a.fabric))?;
     super::garment::check_stage("--settle-max", a.settle_max)?;
     let mut settings = GarmentSettings::default();
@@ -166,48 +191,54 @@ pub fn run(a: GarmentBench) -> anyhow::Result<()> {
             _ => anyhow::bail!("--integrator {}", p.message),
         }
     }
-    let keep = |p: &str, b: &str| {
-        a.only
-            .as_ref()
-            .is_none_or(|o| p.contains(o) || b.contains(o))
-    };
-    let mut rows = Vec::new();
-    for (p, b) in RUNS.into_iter().filter(|(p, b)| keep(p, b)) {
-        let pattern_path = dir.join(format!("patterns/{p}_specification.json"));
-        let pattern = crate::garment::read(&pattern_path)?;
-        let body = read_body(&dir.join(format!("bodies/{b}.obj")), "auto", &pattern)?.mesh;
-        let first = rows.len();
-        for &h in &spacings {
-            settings.assemble.spacing = h;
-            let at = rows.len();
-            for seed in (0..a.seeds).map(|k| (k > 0).then_some(k)) {
-                settings.perturb = seed;
-                for (&sew, &hessian) in sew_spacings
-                    .iter()
-                    .flat_map(|s| a.bending_hessian.iter().map(move |h| (s, h)))
-                {
-                    settings.sew_spacing = sew;
-                    settings.solver.bending_hessian = hessian;
-                    let row = run_one(&pattern, &body, (p, b), &settings)?;
-                    if !a.json {
-                        print_row(&row, spacings.len() > 1);
-                    }
-                    rows.push(row);
+    Ok(Sweep {
+        settings,
+        spacings,
+        sew_spacings,
+    })
+}
+
+/// Pattern `p` on body `b`: a row for each spacing, seed, sew spacing and bending Hessian
+/// (printed as it comes unless `--json`), each spacing's spread over the seeds, and each
+/// row against the finest spacing.
+fn bench_pair(
+    a: &GarmentBench,
+    dir: &Path,
+    (p, b): (&str, &str),
+    sweep: &mut Sweep,
+    rows: &mut Vec<GarmentRow>,
+) -> anyhow::Result<()> {
+    let pattern_path = dir.join(format!("patterns/{p}_specification.json"));
+    let pattern = crate::garment::read(&pattern_path)?;
+    let body = read_body(&dir.join(format!("bodies/{b}.obj")), "auto", &pattern)?.mesh;
+    let (settings, spacings) = (&mut sweep.settings, &sweep.spacings);
+    let first = rows.len();
+    for &h in spacings {
+        settings.assemble.spacing = h;
+        let at = rows.len();
+        for seed in (0..a.seeds).map(|k| (k > 0).then_some(k)) {
+            settings.perturb = seed;
+            for (&sew, &hessian) in (sweep.sew_spacings.iter())
+                .flat_map(|s| a.bending_hessian.iter().map(move |h| (s, h)))
+            {
+                settings.sew_spacing = sew;
+                settings.solver.bending_hessian = hessian;
+                let row = run_one(&pattern, &body, (p, b), settings)?;
+                if !a.json {
+                    print_row(&row, spacings.len() > 1);
                 }
-            }
-            if a.seeds > 1 && !a.json {
-                print_spread(&rows[at..]);
+                rows.push(row);
             }
         }
-        if spacings.len() > 1 || a.seeds > 1 {
-            against_finest(&mut rows[first..]);
-            if !a.json {
-                print_against_finest(&rows[first..]);
-            }
+        if a.seeds > 1 && !a.json {
+            print_spread(&rows[at..]);
         }
     }
-    if a.json {
-        println!("{}", serde_json::to_string_pretty(&rows)?);
+    if spacings.len() > 1 || a.seeds > 1 {
+        against_finest(&mut rows[first..]);
+        if !a.json {
+            print_against_finest(&rows[first..]);
+        }
     }
     Ok(())
 }
