@@ -455,6 +455,57 @@ fn names_listed(names: &[&str]) -> String {
     }
 }
 
+/// An axis's values by name: each name's index, and the names as a problem lists them.
+type Axis = (HashMap<String, usize>, String);
+
+/// The axis of `names`, in order.
+fn axis_index(names: Vec<&str>) -> Axis {
+    let index = names
+        .iter()
+        .enumerate()
+        .map(|(k, n)| (n.to_string(), k))
+        .collect();
+    (index, names_listed(&names))
+}
+
+/// Job `i`'s value `v` of the axis `key`: its index (`None`: no value, and the plan has no
+/// such axis), or `Err` with the problem added to `p`.
+fn listed_value(
+    p: &mut Problems,
+    i: usize,
+    key: &str,
+    v: Option<&String>,
+    (index, names): &Axis,
+) -> Result<Option<usize>, ()> {
+    match (v, index.is_empty()) {
+        (None, true) => Ok(None),
+        (Some(v), false) => match index.get(v) {
+            Some(&k) => Ok(Some(k)),
+            None => {
+                p.add(
+                    format!("job[{i}].{key}"),
+                    format!("'{v}' is not one of {names}"),
+                );
+                Err(())
+            }
+        },
+        (None, false) => {
+            p.add(
+                format!("job[{i}].{key}"),
+                format!("missing: the plan's {key}s are {names}"),
+            );
+            Err(())
+        }
+        (Some(_), true) => {
+            p.add(
+                format!("job[{i}].{key}"),
+                format!("the plan has no {key} axis"),
+            );
+            Err(())
+        }
+    }
+}
+
 /// A file named by the plan, relative to the plan's folder: absolute, and checked to exist.
 fn input(dir: &Path, key: &str, file: &str, p: &mut Problems) -> PathBuf {
     let f = dir.join(file);
@@ -825,58 +876,17 @@ impl Plan {
 
     /// The `[[job]]` list, each value looked up by name.
     fn listed(&self, files: &[JobFile], p: &mut Problems) -> Vec<Job> {
-        let axis = |names: Vec<&'_ str>| -> (HashMap<String, usize>, String) {
-            let index = names
-                .iter()
-                .enumerate()
-                .map(|(k, n)| (n.to_string(), k))
-                .collect();
-            (index, names_listed(&names))
-        };
-        let garments = axis(self.garments.iter().map(|g| g.name.as_str()).collect());
-        let bodies = axis(self.bodies.iter().map(|b| b.name.as_str()).collect());
-        let fabrics = axis(self.fabrics.iter().map(|f| f.name.as_str()).collect());
-        let sizes = axis(self.sizes.iter().map(|s| s.name.as_str()).collect());
+        let garments = axis_index(self.garments.iter().map(|g| g.name.as_str()).collect());
+        let bodies = axis_index(self.bodies.iter().map(|b| b.name.as_str()).collect());
+        let fabrics = axis_index(self.fabrics.iter().map(|f| f.name.as_str()).collect());
+        let sizes = axis_index(self.sizes.iter().map(|s| s.name.as_str()).collect());
         let mut jobs = Vec::new();
         let mut ids = HashSet::new();
         for (i, j) in files.iter().enumerate() {
-            let find = |p: &mut Problems,
-                        key: &str,
-                        v: Option<&String>,
-                        (index, names): &(HashMap<String, usize>, String)|
-             -> Result<Option<usize>, ()> {
-                match (v, index.is_empty()) {
-                    (None, true) => Ok(None),
-                    (Some(v), false) => match index.get(v) {
-                        Some(&k) => Ok(Some(k)),
-                        None => {
-                            p.add(
-                                format!("job[{i}].{key}"),
-                                format!("'{v}' is not one of {names}"),
-                            );
-                            Err(())
-                        }
-                    },
-                    (None, false) => {
-                        p.add(
-                            format!("job[{i}].{key}"),
-                            format!("missing: the plan's {key}s are {names}"),
-                        );
-                        Err(())
-                    }
-                    (Some(_), true) => {
-                        p.add(
-                            format!("job[{i}].{key}"),
-                            format!("the plan has no {key} axis"),
-                        );
-                        Err(())
-                    }
-                }
-            };
-            let g = find(p, "garment", Some(&j.garment), &garments);
-            let b = find(p, "body", j.body.as_ref(), &bodies);
-            let f = find(p, "fabric", j.fabric.as_ref(), &fabrics);
-            let s = find(p, "size", j.size.as_ref(), &sizes);
+            let g = listed_value(p, i, "garment", Some(&j.garment), &garments);
+            let b = listed_value(p, i, "body", j.body.as_ref(), &bodies);
+            let f = listed_value(p, i, "fabric", j.fabric.as_ref(), &fabrics);
+            let s = listed_value(p, i, "size", j.size.as_ref(), &sizes);
             if let (Ok(Some(g)), Ok(b), Ok(f), Ok(s)) = (g, b, f, s) {
                 let job = self.job(g, b, f, s);
                 if !ids.insert(job.id.clone()) {
