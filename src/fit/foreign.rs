@@ -188,39 +188,10 @@ pub fn from_freesewing(value: &serde_json::Value, path: &Path) -> Result<Importe
         });
     };
     let mm = numbers(map, path, at)?;
-    let cm = |k: &str| mm.get(k).map(|v| v / 10.0);
-    let mut m = Measurements {
-        units: Some("cm".into()),
-        bust_girth: cm("chest"),
-        underbust_girth: cm("underbust"),
-        waist_girth: cm("waist"),
-        top_hip_girth: cm("hips"),
-        hip_girth: cm("seat"),
-        neck_base_girth: cm("neck"),
-        shoulder_width: cm("shoulderToShoulder"),
-        waist_height: cm("waistToFloor"),
-        ..Measurements::default()
-    };
-    if let Some(w) = m.waist_height {
-        m.top_hip_height = cm("waistToHips").map(|d| w - d);
-        m.hip_height = cm("waistToSeat").map(|d| w - d);
-        m.underbust_height = cm("waistToUnderbust").map(|d| w + d);
-        m.bust_height = (m.underbust_height.zip(cm("bustPointToUnderbust"))).map(|(u, d)| u + d);
-    }
+    let mut m = freesewing_cm(&mm);
     let mut notes = Vec::new();
-    m.stature = match (m.waist_height, cm("hpsToWaistBack")) {
-        (Some(w), Some(b)) => {
-            let s = (w + b) / NECK_BASE_LEVEL;
-            notes.push(format!("stature estimated from waistToFloor + hpsToWaistBack (the neck base, at {NECK_BASE_LEVEL} of the stature): {s:.1} cm"));
-            Some(s)
-        }
-        (Some(w), None) => {
-            let s = w / WAIST_LEVEL;
-            notes.push(format!("stature estimated from waistToFloor (the waist, at {WAIST_LEVEL} of the stature): {s:.1} cm"));
-            Some(s)
-        }
-        _ => None,
-    };
+    let hps_to_waist_back = mm.get("hpsToWaistBack").map(|v| v / 10.0);
+    m.stature = estimated_stature(m.waist_height, hps_to_waist_back, &mut notes);
     const USED: [&str; 13] = [
         "neck",
         "chest",
@@ -242,6 +213,53 @@ pub fn from_freesewing(value: &serde_json::Value, path: &Path) -> Result<Importe
         format: "freesewing",
         notes,
     })
+}
+
+/// A FreeSewing set's values (mm) as drapekit's measurements in cm: girths, and heights
+/// from the floor measured from the waist.
+fn freesewing_cm(mm: &BTreeMap<String, f64>) -> Measurements {
+    let cm = |k: &str| mm.get(k).map(|v| v / 10.0);
+    let mut m = Measurements {
+        units: Some("cm".into()),
+        bust_girth: cm("chest"),
+        underbust_girth: cm("underbust"),
+        waist_girth: cm("waist"),
+        top_hip_girth: cm("hips"),
+        hip_girth: cm("seat"),
+        neck_base_girth: cm("neck"),
+        shoulder_width: cm("shoulderToShoulder"),
+        waist_height: cm("waistToFloor"),
+        ..Measurements::default()
+    };
+    if let Some(w) = m.waist_height {
+        m.top_hip_height = cm("waistToHips").map(|d| w - d);
+        m.hip_height = cm("waistToSeat").map(|d| w - d);
+        m.underbust_height = cm("waistToUnderbust").map(|d| w + d);
+        m.bust_height = (m.underbust_height.zip(cm("bustPointToUnderbust"))).map(|(u, d)| u + d);
+    }
+    m
+}
+
+/// The stature from the waist height and the neck base above it (or the waist alone), with
+/// the note that says how; `None` without a waist height.
+fn estimated_stature(
+    waist_height: Option<f64>,
+    hps_to_waist_back: Option<f64>,
+    notes: &mut Vec<String>,
+) -> Option<f64> {
+    match (waist_height, hps_to_waist_back) {
+        (Some(w), Some(b)) => {
+            let s = (w + b) / NECK_BASE_LEVEL;
+            notes.push(format!("stature estimated from waistToFloor + hpsToWaistBack (the neck base, at {NECK_BASE_LEVEL} of the stature): {s:.1} cm"));
+            Some(s)
+        }
+        (Some(w), None) => {
+            let s = w / WAIST_LEVEL;
+            notes.push(format!("stature estimated from waistToFloor (the waist, at {WAIST_LEVEL} of the stature): {s:.1} cm"));
+            Some(s)
+        }
+        _ => None,
+    }
 }
 
 /// A GarmentCode body (YAML, cm) as drapekit's measurements.
