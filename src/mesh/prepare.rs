@@ -86,14 +86,7 @@ pub struct PrepareReport {
 pub fn prepare(mesh: &mut TriMesh, opts: &PrepareOptions) -> PrepareReport {
     let input_vertices = mesh.positions.len();
     let input_faces = mesh.faces.len();
-    let mut factor = 1.0;
-    if let Some((from, to)) = opts.units {
-        factor = Units::factor(from, to);
-        scale(mesh, factor);
-    }
-    if let Some((from, to)) = opts.up {
-        change_up(mesh, from, to);
-    }
+    let factor = transform(mesh, opts);
     let weld_report = opts.weld.map(|t| {
         let t = match t {
             WeldTolerance::Absolute(d) => WeldTolerance::Absolute(d * factor),
@@ -117,21 +110,7 @@ pub fn prepare(mesh: &mut TriMesh, opts: &PrepareOptions) -> PrepareReport {
         0
     };
     let unreferenced_vertices = mesh.drop_unreferenced_vertices();
-    let topo = Topology::build(mesh);
-    let plan = orient::plan(mesh, &topo, true);
-    let after = diagnose_with(
-        mesh,
-        &topo,
-        &plan,
-        opts.orient,
-        opts.drop_degenerate && opts.drop_duplicates,
-    );
-    let orient_report = if opts.orient {
-        orient::apply(mesh, &plan);
-        Some(plan.report())
-    } else {
-        None
-    };
+    let (after, orient_report) = orient_and_diagnose(mesh, opts);
     PrepareReport {
         input_vertices,
         input_faces,
@@ -149,6 +128,43 @@ pub fn prepare(mesh: &mut TriMesh, opts: &PrepareOptions) -> PrepareReport {
         output_faces: mesh.faces.len(),
         after,
     }
+}
+
+/// Scales and turns `mesh` as `opts` ask; the scale factor (1 without units).
+fn transform(mesh: &mut TriMesh, opts: &PrepareOptions) -> f64 {
+    let mut factor = 1.0;
+    if let Some((from, to)) = opts.units {
+        factor = Units::factor(from, to);
+        scale(mesh, factor);
+    }
+    if let Some((from, to)) = opts.up {
+        change_up(mesh, from, to);
+    }
+    factor
+}
+
+/// The diagnosis after (of the mesh as it will be oriented, when `opts.orient`), then the
+/// orientation applied, with its report.
+fn orient_and_diagnose(
+    mesh: &mut TriMesh,
+    opts: &PrepareOptions,
+) -> (Diagnosis, Option<OrientReport>) {
+    let topo = Topology::build(mesh);
+    let plan = orient::plan(mesh, &topo, true);
+    let after = diagnose_with(
+        mesh,
+        &topo,
+        &plan,
+        opts.orient,
+        opts.drop_degenerate && opts.drop_duplicates,
+    );
+    let orient_report = if opts.orient {
+        orient::apply(mesh, &plan);
+        Some(plan.report())
+    } else {
+        None
+    };
+    (after, orient_report)
 }
 
 #[cfg(test)]
