@@ -99,7 +99,49 @@ struct Report {
     order: [f64; 3],
     speed_fit_tessellate_ms: f64,
     speed_with_estimates_ms: f64,
+    scan: ScanSpeed,
     runs: u32,
+}
+
+/// A scan's slicing, both ways, median ms.
+#[derive(Debug, Serialize)]
+struct ScanSpeed {
+    faces: usize,
+    levels: usize,
+    full_pass_ms: f64,
+    banded_ms: f64,
+}
+
+/// Slices a lathed body (a profile of 400 rings, 120 sides) at 1,000 levels, each level by a
+/// pass over all faces and through one [`Slicer`] built in the timed run; checks the loops
+/// agree.
+fn scan_speed(runs: u32) -> ScanSpeed {
+    use crate::mesh::slice::{slice, Slicer};
+    let profile: Vec<(f64, f64)> = (0..400)
+        .map(|i| {
+            let z = i as f64 / 399.0 * 1.7;
+            (0.15 + 0.03 * (z * 9.0).sin() + 0.02 * (z * 23.0).cos(), z)
+        })
+        .collect();
+    let body = crate::mesh::generate::lathe(&profile, 120);
+    let levels: Vec<f64> = (0..1000)
+        .map(|i| 0.001 + i as f64 * 1.698 / 999.0)
+        .collect();
+    let full = || levels.iter().map(|&h| slice(&body, h)).collect::<Vec<_>>();
+    let banded = || {
+        let s = Slicer::new(&body);
+        levels.iter().map(|&h| s.slice(h)).collect::<Vec<_>>()
+    };
+    assert!(
+        full() == banded(),
+        "the banded slices differ from full passes"
+    );
+    ScanSpeed {
+        faces: body.faces.len(),
+        levels: levels.len(),
+        full_pass_ms: 1e3 * timed(runs, full),
+        banded_ms: 1e3 * timed(runs, banded),
+    }
 }
 
 /// Draws the error against the node intervals, a line per correction.
@@ -152,8 +194,13 @@ pub fn run(a: FitBench) -> anyhow::Result<()> {
         );
     }
     let (core, full) = fit_speed(a.runs);
+    let scan = scan_speed(a.runs);
     if !a.json {
         println!("  60 sections x 256 points, fit + tessellate 256 x 256: median {core:.1} ms (goal <= 50 ms); with error estimates and diagnosis: {full:.1} ms");
+        println!(
+            "  scan slicing, {} levels of a {}-face lathed body, one thread: a pass over every face per level {:.1} ms, faces banded by height (mesh::slice::Slicer) {:.1} ms: {:.1}x, the same loops",
+            scan.levels, scan.faces, scan.full_pass_ms, scan.banded_ms, scan.full_pass_ms / scan.banded_ms
+        );
     } else {
         let rep = Report {
             rows,
@@ -161,6 +208,7 @@ pub fn run(a: FitBench) -> anyhow::Result<()> {
             order,
             speed_fit_tessellate_ms: core,
             speed_with_estimates_ms: full,
+            scan,
             runs: a.runs,
         };
         println!("{}", serde_json::to_string_pretty(&rep)?);
