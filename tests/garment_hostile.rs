@@ -361,3 +361,39 @@ fn a_scenes_report_over_an_input_is_refused_before_any_work() {
         assert!(!out.exists(), "{stderr}");
     }
 }
+
+#[test]
+fn an_arc_of_a_radius_far_beyond_its_chord_is_the_nearly_straight_edge_it_says() {
+    // The front's edge 1 runs from (30, 0) to (30, 40). At radius 1e20 the arc's centre,
+    // 1e20 away, rounded the chord's x = 30 off and its middle was drawn 30 cm away, at x = 0,
+    // a wrong garment sewn without a word; at 1e300 r^2 overflowed, every point was NaN, and
+    // the cloth refused "outline point 17", without the file's name.
+    for radius in ["1e20", "1e300", "1.7976931348623157e308"] {
+        for right in [0, 1] {
+            let curved = format!(
+                r#"{{"endpoints": [1, 2], "curvature": {{"type": "circle", "params": [{radius}, 0, {right}]}}}}"#
+            );
+            let text = tube().replacen(r#"{"endpoints": [1, 2]}"#, &curved, 1);
+            assert_ne!(text, tube());
+            let pattern = parse(&text, Path::new("p.json")).unwrap();
+            let front = &pattern.panels[pattern.panel_index("front").unwrap()];
+            let mid = front.edges[1].point(&front.vertices, 0.5);
+            let off = (mid - drapekit::math::Point2::new(30.0, 20.0)).norm();
+            assert!(off < 1e-9, "{radius}: {mid}");
+            let length = front.edges[1].length(&front.vertices);
+            assert!((length - 40.0).abs() < 1e-9, "{radius}: {length}");
+            let opts = AssembleOptions {
+                spacing: 0.04,
+                ..AssembleOptions::default()
+            };
+            let a = assemble(&pattern, &opts).unwrap();
+            let plain = assemble(&parse(&tube(), Path::new("p.json")).unwrap(), &opts).unwrap();
+            for (piece, straight) in a.pieces.iter().zip(&plain.pieces) {
+                assert_eq!(piece.3.len(), straight.3.len(), "{radius}");
+                for (p, q) in piece.3.iter().zip(&straight.3) {
+                    assert!((p - q).norm() < 1e-9, "{radius}: {p} against {q}");
+                }
+            }
+        }
+    }
+}

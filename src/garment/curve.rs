@@ -12,6 +12,11 @@
 //!   `2 asin(h/r)` (small) or `2π - 2 asin(h/r)` (large); `p(t)` turns linearly in angle, so
 //!   `t` is proportional to arc length. A radius below `h` (invalid; validation reports it)
 //!   is treated as `h`, a half circle.
+//! - A small arc of a radius beyond [`FLAT_ARC_RATIO`] times its half chord is computed from
+//!   the chord instead of from its centre (see [`flat_arc_point`]): the centre, `r` away,
+//!   would round the chord's coordinates off (at `r = 1e20` on a 40 cm chord the middle was
+//!   drawn 30 cm off), and `r²` overflows at `r = 1e300`. Every other arc takes the centre's
+//!   formula, bit for bit as before.
 //!
 //! Lengths of Beziers are measured on a dense polyline of [`DENSE_SEGMENTS`] segments;
 //! [`Curve::sample`] reparametrises by arc length along that polyline.
@@ -42,6 +47,18 @@ pub enum Curve {
     },
 }
 
+/// The radius, in half chords, beyond which a small arc is computed from its chord
+/// ([`flat_arc_point`]) and not from its centre.
+///
+/// The centre's formula `c + r (cos, sin)` carries an error of a few units in the last place
+/// of `r`, about `r * 2.2e-16`: at `r = 1e6 h` that is `2e-10 h`, far below anything a cloth
+/// sees, and it grows with `r` (at `r = 5e18 h` it is the chord itself). The chord's formula
+/// drops terms of relative size `(h / r)^4 < 1e-24` here, so the two agree within a few of
+/// those units, below `1e-9 h`, where they meet; such an arc rises at most `h / 2e6` off its chord. Real arcs have radii of
+/// one to a few half chords, six orders of magnitude below the switch, and keep the centre's
+/// formula and its bits.
+pub const FLAT_ARC_RATIO: f64 = 1e6;
+
 /// An arc's centre, radius, start angle and signed sweep (positive: counter-clockwise).
 struct ArcGeometry {
     center: Point2,
@@ -67,7 +84,12 @@ fn arc_geometry(
     let r = radius.max(half);
     let left = Vec2::new(-d.y, d.x) / chord;
     let bulge = if right { -left } else { left };
-    let offset = (r * r - half * half).max(0.0).sqrt();
+    let offset = if (r * r).is_finite() {
+        (r * r - half * half).max(0.0).sqrt()
+    } else {
+        // A large arc beyond 1e154 (the reader refuses its size): r^2 would overflow.
+        r * (1.0 - (half / r).powi(2)).max(0.0).sqrt()
+    };
     let toward = if large_arc { bulge } else { -bulge };
     let center = Point2::from((s.coords + e.coords) / 2.0) + toward * offset;
     let small = 2.0 * (half / r).min(1.0).asin();
@@ -79,6 +101,44 @@ fn arc_geometry(
         start_angle: start.y.atan2(start.x),
         sweep: if right { magnitude } else { -magnitude },
     })
+}
+
+/// Whether an arc of this radius from `s` to `e` is a small arc so flat that its points and
+/// length come from its chord ([`FLAT_ARC_RATIO`]).
+fn is_flat_arc(s: &Point2, e: &Point2, radius: f64, large_arc: bool) -> bool {
+    !large_arc && radius > FLAT_ARC_RATIO * ((e - s).norm() / 2.0)
+}
+
+/// The point at `t` of a small arc from `s` to `e` of a radius beyond [`FLAT_ARC_RATIO`] half
+/// chords, from the chord: with `w = 2t - 1`, half chord `h`, half sweep `a = asin(h / r)`,
+/// the point is `h sin(w a) / sin(a)` along the chord from its midpoint and
+/// `r (cos(w a) - cos(a))` towards the bulge. For `a < 1e-6` these are
+/// `h w (1 + (1 - w²) a² / 6)` and `h a (1 - w²) / 2` up to relative terms of order `a²`
+/// (about `1e-12` of a rise of at most `h / 2e6`, and `a^4 < 1e-24` along): finite for every
+/// finite radius, and no centre to round the chord's digits off.
+fn flat_arc_point(s: &Point2, e: &Point2, radius: f64, right: bool, t: f64) -> Point2 {
+    let d = e - s;
+    let chord = d.norm();
+    if chord == 0.0 {
+        return *s;
+    }
+    let half = chord / 2.0;
+    let a = (half / radius).asin();
+    let w = 2.0 * t - 1.0;
+    let along = half * w * (1.0 + (1.0 - w * w) * a * a / 6.0);
+    let rise = half * a * (1.0 - w * w) / 2.0;
+    let left = Vec2::new(-d.y, d.x) / chord;
+    let bulge = if right { -left } else { left };
+    Point2::from((s.coords + e.coords) / 2.0) + d / chord * along + bulge * rise
+}
+
+/// The length of a small arc from `s` to `e` of a radius beyond [`FLAT_ARC_RATIO`] half
+/// chords: `2 r asin(h / r) = 2 h (1 + a² / 6 + ...)` with `a = h / r < 1e-6` (the next term,
+/// `3 a^4 / 40`, is below `1e-24`).
+fn flat_arc_length(s: &Point2, e: &Point2, radius: f64) -> f64 {
+    let chord = (e - s).norm();
+    let a = chord / 2.0 / radius;
+    chord * (1.0 + a * a / 6.0)
 }
 
 impl Curve {
@@ -96,6 +156,11 @@ impl Curve {
                     + c2.coords * (3.0 * u * t * t)
                     + e.coords * (t * t * t),
             ),
+            Curve::Arc {
+                radius,
+                large_arc,
+                right,
+            } if is_flat_arc(s, e, radius, large_arc) => flat_arc_point(s, e, radius, right, t),
             Curve::Arc {
                 radius,
                 large_arc,
@@ -127,6 +192,9 @@ impl Curve {
     pub fn length(&self, s: &Point2, e: &Point2) -> f64 {
         match *self {
             Curve::Straight => (e - s).norm(),
+            Curve::Arc {
+                radius, large_arc, ..
+            } if is_flat_arc(s, e, radius, large_arc) => flat_arc_length(s, e, radius),
             Curve::Arc {
                 radius,
                 large_arc,
@@ -320,6 +388,98 @@ mod tests {
                     "{c:?}: step {x} vs mean {mean}"
                 );
             }
+        }
+    }
+
+    /// The arc's point and length by the centre's formula, as written before the chord's
+    /// formula existed (the reference for the bits of ordinary arcs).
+    fn centre_formula(
+        s: &Point2,
+        e: &Point2,
+        r: f64,
+        large: bool,
+        right: bool,
+        t: f64,
+    ) -> (Point2, f64) {
+        let d = e - s;
+        let chord = d.norm();
+        let half = chord / 2.0;
+        let r = r.max(half);
+        let left = Vec2::new(-d.y, d.x) / chord;
+        let bulge = if right { -left } else { left };
+        let offset = (r * r - half * half).max(0.0).sqrt();
+        let toward = if large { bulge } else { -bulge };
+        let center = Point2::from((s.coords + e.coords) / 2.0) + toward * offset;
+        let small = 2.0 * (half / r).min(1.0).asin();
+        let magnitude = if large { 2.0 * PI - small } else { small };
+        let start = s - center;
+        let sweep = if right { magnitude } else { -magnitude };
+        let angle = start.y.atan2(start.x) + t * sweep;
+        (
+            center + Vec2::new(angle.cos(), angle.sin()) * r,
+            r * sweep.abs(),
+        )
+    }
+
+    #[test]
+    fn arcs_up_to_the_flat_ratio_keep_the_centre_formulas_bits() {
+        let mut seed = 7u64;
+        let mut next = || {
+            seed = crate::math::mix(seed);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for k in 0..20_000 {
+            let s = Point2::new(200.0 * next() - 100.0, 200.0 * next() - 100.0);
+            let e = Point2::new(200.0 * next() - 100.0, 200.0 * next() - 100.0);
+            let half = (e - s).norm() / 2.0;
+            // Ratios from 1 to the switch, spread over the decades, and the switch itself.
+            let ratio = if k % 100 == 0 {
+                FLAT_ARC_RATIO
+            } else {
+                10f64.powf(6.0 * next())
+            };
+            let radius = half * ratio;
+            let (large, right) = (k % 2 == 0, k % 3 == 0);
+            let arc = Curve::Arc {
+                radius,
+                large_arc: large,
+                right,
+            };
+            let t = next();
+            let (p, length) = centre_formula(&s, &e, radius, large, right, t);
+            let q = arc.point(&s, &e, t);
+            assert_eq!(
+                (q.x.to_bits(), q.y.to_bits()),
+                (p.x.to_bits(), p.y.to_bits()),
+                "{arc:?} {s} {e} {t}"
+            );
+            assert_eq!(arc.length(&s, &e).to_bits(), length.to_bits(), "{arc:?}");
+        }
+    }
+
+    #[test]
+    fn a_flat_arc_meets_the_centre_formula_at_the_switch() {
+        // Just beyond the switch the chord's formula takes over; the two agree within a few
+        // units in the last place of r (each 2.2e-10 of the half chord there; 3.6e-10 seen),
+        // and the rise is the sagitta h^2 / 2r.
+        let (s, e) = (Point2::new(3.0, -7.0), Point2::new(33.0, 33.0));
+        let half = 25.0;
+        for right in [false, true] {
+            let radius = FLAT_ARC_RATIO * half * (1.0 + 1e-12);
+            let arc = Curve::Arc {
+                radius,
+                large_arc: false,
+                right,
+            };
+            for t in [0.0, 0.1, 0.5, 0.93, 1.0] {
+                let (p, _) = centre_formula(&s, &e, radius, false, right, t);
+                let off = (arc.point(&s, &e, t) - p).norm() / half;
+                assert!(off < 1e-9, "{t}: {off}");
+            }
+            let mid = arc.point(&s, &e, 0.5) - Point2::new(18.0, 13.0);
+            assert!((mid.norm() - half * half / (2.0 * radius)).abs() < 1e-12 * half);
+            let (_, length) = centre_formula(&s, &e, radius, false, right, 0.0);
+            assert!((arc.length(&s, &e) - length).abs() < 1e-10 * half);
         }
     }
 
