@@ -397,3 +397,23 @@ fn an_arc_of_a_radius_far_beyond_its_chord_is_the_nearly_straight_edge_it_says()
         }
     }
 }
+
+#[test]
+fn an_empty_panel_name_is_refused() {
+    // "" was read as a panel and sewn (stitches named it, the OBJ had a group "g " of no
+    // name); a name of spaces is no better.
+    for name in ["", "   "] {
+        let text = tube().replace("\"back\"", &format!("\"{name}\"")).replacen(
+            "\"back\":",
+            &format!("\"{name}\":"),
+            1,
+        );
+        let p = problems(&text);
+        assert_eq!(
+            p,
+            vec![Problem::EmptyName { panel: name.into() }],
+            "{name:?}"
+        );
+        assert!(p[0].to_string().contains("its name is empty"), "{}", p[0]);
+    }
+}

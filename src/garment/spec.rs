@@ -132,6 +132,8 @@ pub enum Problem {
     /// A panel's name holds a control character (a line break would split the line that
     /// names its group in the garment's OBJ, and what follows it would be read as data).
     ControlInName { panel: String },
+    /// A panel's name is empty or only white space.
+    EmptyName { panel: String },
     /// A number of a panel is NaN or infinite.
     NonFinite { panel: String, what: String },
     /// Fewer than 3 edges.
@@ -251,6 +253,10 @@ impl fmt::Display for Problem {
             ControlInName { panel } => write!(
                 f,
                 "panel {panel:?}: its name holds a control character (a line break, a tab, a NUL); the garment's OBJ names each panel's group on one line"
+            ),
+            EmptyName { panel } => write!(
+                f,
+                "panel {panel:?}: its name is empty (or only white space); each panel needs a name: stitches, the garment's OBJ groups and the report name panels by it"
             ),
             NonFinite { panel, what } => write!(f, "panel '{panel}': {what} is not a finite number"),
             TooFewEdges { panel, count } => {
@@ -556,6 +562,11 @@ fn build(raw: RawSpec, problems: &mut Vec<Problem>) -> Pattern {
         }
     };
     let order = panel_order(&raw.pattern, problems);
+    for name in order.iter().filter(|n| n.trim().is_empty()) {
+        problems.push(Problem::EmptyName {
+            panel: name.clone(),
+        });
+    }
     for name in order.iter().filter(|n| n.chars().any(char::is_control)) {
         problems.push(Problem::ControlInName {
             panel: name.clone(),
