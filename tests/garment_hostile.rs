@@ -417,3 +417,32 @@ fn an_empty_panel_name_is_refused() {
         assert!(p[0].to_string().contains("its name is empty"), "{}", p[0]);
     }
 }
+
+#[test]
+fn a_rotation_beyond_a_thousand_turns_is_refused() {
+    // 1e300 degrees was taken as whatever angle its rounding made it.
+    for (rotation, axis) in [
+        ("[1e300, 0, 0]", 0),
+        ("[0, -360000.5, 0]", 1),
+        ("[0, 0, 1e20]", 2),
+    ] {
+        let text = tube().replacen("[0, 0, 0]", rotation, 1);
+        assert_ne!(text, tube());
+        let p = problems(&text);
+        assert!(
+            matches!(&p[..], [Problem::RotationTooLarge { panel, axis: a, .. }]
+                if panel == "front" && *a == axis),
+            "{rotation}: {p:?}"
+        );
+        assert!(
+            p[0].to_string().starts_with("panel 'front': rotation["),
+            "{}",
+            p[0]
+        );
+    }
+    // Two turns the other way and a thousand turns are angles.
+    for rotation in ["[0, -720, 0]", "[360000, 0, 0]"] {
+        let text = tube().replacen("[0, 0, 0]", rotation, 1);
+        assert!(parse(&text, Path::new("p.json")).is_ok(), "{rotation}");
+    }
+}

@@ -136,6 +136,12 @@ pub enum Problem {
     EmptyName { panel: String },
     /// A number of a panel is NaN or infinite.
     NonFinite { panel: String, what: String },
+    /// A rotation angle beyond [`ROTATION_MAX_DEG`] (axis 0: x, 1: y, 2: z).
+    RotationTooLarge {
+        panel: String,
+        axis: usize,
+        degrees: f64,
+    },
     /// Fewer than 3 edges.
     TooFewEdges { panel: String, count: usize },
     /// An edge names a vertex index past the end of the vertex list.
@@ -236,6 +242,13 @@ pub const PANEL_SIZE: [f64; 2] = [1e-3, 100.0];
 /// square of the least size across, corner to corner, encloses half of that square).
 pub const PANEL_AREA_MIN: f64 = 0.1 * PANEL_SIZE[0] * PANEL_SIZE[0];
 
+/// The largest rotation angle a panel may give, degrees: a thousand turns. An angle counts
+/// modulo 360, and a file's angles are within a turn or two; at 3.6e5 one unit in the last
+/// place is 6e-11 degrees (1e-12 rad: below a nanometre on a panel of the largest
+/// [`PANEL_SIZE`]), while at 1e300 it is 1e284 degrees, and the angle used is whatever the
+/// rounding of `1e300 mod 360` makes it: a number that has lost its meaning.
+pub const ROTATION_MAX_DEG: f64 = 3.6e5;
+
 /// How far from the pattern's origin a panel's translation or vertex may be, m. A garment
 /// is placed round a body at the origin; a panel a kilometre away is a wrong translation,
 /// and at 1e200 m its particles' positions would lose every digit of the cloth's spacing.
@@ -259,6 +272,11 @@ impl fmt::Display for Problem {
                 "panel {panel:?}: its name is empty (or only white space); each panel needs a name: stitches, the garment's OBJ groups and the report name panels by it"
             ),
             NonFinite { panel, what } => write!(f, "panel '{panel}': {what} is not a finite number"),
+            RotationTooLarge { panel, axis, degrees } => write!(
+                f,
+                "panel '{panel}': rotation[{axis}] (about {}) is {degrees:e} degrees; a panel's angle is within {ROTATION_MAX_DEG:e} degrees (a thousand turns) either way: beyond that its last digit is worth more than a millionth of a degree, and at 1e300 it is no angle at all",
+                ["x", "y", "z"][*axis]
+            ),
             TooFewEdges { panel, count } => {
                 write!(f, "panel '{panel}' has {count} edge(s); a panel needs at least 3")
             }
@@ -747,6 +765,15 @@ fn check_finite(name: &str, raw: &RawPanel, problems: &mut Vec<Problem>) {
     }
     if !raw.rotation.iter().all(|x| x.is_finite()) {
         report("rotation".into());
+    }
+    for (axis, &degrees) in raw.rotation.iter().enumerate() {
+        if degrees.is_finite() && degrees.abs() > ROTATION_MAX_DEG {
+            problems.push(Problem::RotationTooLarge {
+                panel: name.into(),
+                axis,
+                degrees,
+            });
+        }
     }
 }
 
