@@ -446,3 +446,63 @@ fn a_rotation_beyond_a_thousand_turns_is_refused() {
         assert!(parse(&text, Path::new("p.json")).is_ok(), "{rotation}");
     }
 }
+
+#[test]
+fn right_wrong_given_twice_is_refused_with_its_stitch() {
+    let once = r#"[{"panel": "front", "edge": 1}, {"panel": "back", "edge": 3}, "right_wrong"]"#;
+    let twice = r#"[{"panel": "front", "edge": 1}, {"panel": "back", "edge": 3}, "right_wrong", "right_wrong"]"#;
+    let plain = r#"[{"panel": "front", "edge": 1}, {"panel": "back", "edge": 3}]"#;
+    assert!(parse(&tube().replacen(plain, once, 1), Path::new("p.json")).is_ok());
+    let text = tube().replacen(plain, twice, 1);
+    assert_ne!(text, tube());
+    let p = problems(&text);
+    assert_eq!(p.len(), 1, "{p:?}");
+    assert_eq!(
+        p[0].to_string(),
+        "stitch 0: \"right_wrong\" is given twice; it may be given once"
+    );
+}
+
+#[test]
+fn a_key_given_twice_is_refused_where_it_is() {
+    // serde_json's Value keeps the last of two keys: a curvature of "type" circle then cubic
+    // was read as the cubic, a stitch element's second "edge" replaced the first, silently.
+    // The keys of panels, edges, the pattern and its properties were refused by serde.
+    let arc = r#"{"endpoints": [1, 2], "curvature": {"type": "circle", "type": "cubic", "params": [[0.5, 0.1], [0.5, 0.1]]}}"#;
+    let edge = r#"{"panel": "back", "edge": 3, "edge": 1}"#;
+    let mut cases = vec![
+        (
+            r#"{"endpoints": [1, 2]}"#.to_string(),
+            arc.to_string(),
+            "key 'type' is given twice".to_string(),
+        ),
+        (
+            r#"{"panel": "back", "edge": 3}"#.into(),
+            edge.into(),
+            "key 'edge' is given twice".into(),
+        ),
+    ];
+    for (key, value) in [
+        ("translation", "[0, 80, 30]"),
+        ("endpoints", "[0, 1]"),
+        ("units_in_meter", "100"),
+    ] {
+        let once = format!(r#""{key}": {value}"#);
+        cases.push((
+            once.clone(),
+            format!("{once}, {once}"),
+            format!("duplicate field `{key}`"),
+        ));
+    }
+    for (from, to, key) in cases {
+        let text = tube().replacen(&from, &to, 1);
+        assert_ne!(text, tube(), "{to}");
+        match parse(&text, Path::new("p.json")) {
+            Err(e @ SpecError::Shape { .. }) => {
+                let m = e.to_string();
+                assert!(m.starts_with("p.json:") && m.contains(&key), "{m}");
+            }
+            other => panic!("{to}: {other:?}"),
+        }
+    }
+}

@@ -415,7 +415,7 @@ struct RawPanel {
 struct RawEdge {
     #[serde(deserialize_with = "exact")]
     endpoints: [usize; 2],
-    #[serde(default)]
+    #[serde(default, deserialize_with = "unique_optional")]
     curvature: Option<Value>,
     #[serde(default)]
     label: Option<String>,
@@ -481,11 +481,83 @@ fn unique_panels<'de, D: serde::Deserializer<'de>>(
     d.deserialize_map(Panels)
 }
 
+/// A JSON value whose objects give each key once: serde_json's `Value` keeps the last of
+/// two and drops the other without a word (`{"type": "circle", "type": "cubic"}` was a
+/// cubic). The structs' own keys are refused twice by serde; these are the values read as
+/// `Value` (a curvature, a stitch element).
+struct UniqueValue(Value);
+
+impl<'de> Deserialize<'de> for UniqueValue {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        d.deserialize_any(UniqueVisitor).map(UniqueValue)
+    }
+}
+
+struct UniqueVisitor;
+
+impl<'de> serde::de::Visitor<'de> for UniqueVisitor {
+    type Value = Value;
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str("a JSON value")
+    }
+    fn visit_bool<E>(self, v: bool) -> Result<Value, E> {
+        Ok(Value::Bool(v))
+    }
+    fn visit_i64<E>(self, v: i64) -> Result<Value, E> {
+        Ok(Value::from(v))
+    }
+    fn visit_u64<E>(self, v: u64) -> Result<Value, E> {
+        Ok(Value::from(v))
+    }
+    fn visit_f64<E>(self, v: f64) -> Result<Value, E> {
+        Ok(serde_json::Number::from_f64(v).map_or(Value::Null, Value::Number))
+    }
+    fn visit_str<E>(self, v: &str) -> Result<Value, E> {
+        Ok(Value::String(v.into()))
+    }
+    fn visit_string<E>(self, v: String) -> Result<Value, E> {
+        Ok(Value::String(v))
+    }
+    fn visit_unit<E>(self) -> Result<Value, E> {
+        Ok(Value::Null)
+    }
+    fn visit_none<E>(self) -> Result<Value, E> {
+        Ok(Value::Null)
+    }
+    fn visit_some<D: serde::Deserializer<'de>>(self, d: D) -> Result<Value, D::Error> {
+        UniqueValue::deserialize(d).map(|v| v.0)
+    }
+    fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> Result<Value, A::Error> {
+        let mut out = Vec::new();
+        while let Some(UniqueValue(v)) = seq.next_element()? {
+            out.push(v);
+        }
+        Ok(Value::Array(out))
+    }
+    fn visit_map<A: serde::de::MapAccess<'de>>(self, mut map: A) -> Result<Value, A::Error> {
+        let mut out = serde_json::Map::new();
+        while let Some(key) = map.next_key::<String>()? {
+            if out.contains_key(&key) {
+                let m = format!("key '{key}' is given twice in this object; JSON would keep the last and drop the other, so each key may be given once");
+                return Err(serde::de::Error::custom(m));
+            }
+            let UniqueValue(v) = map.next_value()?;
+            out.insert(key, v);
+        }
+        Ok(Value::Object(out))
+    }
+}
+
+/// An optional value read as [`UniqueValue`]; `null` is none, as serde reads an `Option`.
+fn unique_optional<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<Value>, D::Error> {
+    Ok(Some(UniqueValue::deserialize(d)?.0).filter(|v| !v.is_null()))
+}
+
 /// A stitch element: `{"panel": NAME, "edge": INDEX}` or a flag such as `"right_wrong"`, with
 /// an error that says so (not serde's "did not match any variant").
 impl<'de> Deserialize<'de> for RawStitchPart {
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        let v = Value::deserialize(d)?;
+        let UniqueValue(v) = UniqueValue::deserialize(d)?;
         if let Some(flag) = v.as_str() {
             return Ok(RawStitchPart::Flag(flag.into()));
         }
@@ -1233,6 +1305,13 @@ fn stitch_parts<'a>(
     for part in parts {
         match part {
             RawStitchPart::End { panel, edge } => ends.push((panel.as_str(), *edge)),
+            RawStitchPart::Flag(f) if f == "right_wrong" && right_wrong => {
+                problems.push(Problem::MalformedStitch {
+                    stitch: i,
+                    message: "\"right_wrong\" is given twice; it may be given once".into(),
+                });
+                return None;
+            }
             RawStitchPart::Flag(f) if f == "right_wrong" => right_wrong = true,
             RawStitchPart::Flag(f) => {
                 problems.push(Problem::MalformedStitch {
