@@ -506,3 +506,52 @@ fn a_key_given_twice_is_refused_where_it_is() {
         }
     }
 }
+
+#[test]
+fn a_missing_units_in_meter_is_assumed_and_said_so() {
+    // GarmentCode's default of 100 was taken without a word in the summary or the report.
+    let text = tube().replacen(r#", "units_in_meter": 100"#, "", 1);
+    assert_ne!(text, tube());
+    let p = parse(&text, Path::new("p.json")).unwrap();
+    assert!(p.units_assumed && p.units_in_meter == 100.0);
+    let given = parse(&tube(), Path::new("p.json")).unwrap();
+    assert!(!given.units_assumed && given.units_in_meter == 100.0);
+    // The run: a column for a body, sewn briefly; the summary and the report say it.
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("p.json"), &text).unwrap();
+    common::write_y_up_obj(
+        &common::cylinder(0.186, 0.5, 1.5, 48),
+        &d.join("column.obj"),
+    );
+    let (out, report) = (d.join("out"), d.join("r.json"));
+    let (p, b) = (d.join("p.json"), d.join("column.obj"));
+    let (p, b, o, r) = (
+        p.to_str().unwrap(),
+        b.to_str().unwrap(),
+        out.to_str().unwrap(),
+        report.to_str().unwrap(),
+    );
+    let mut args = vec!["garment", p, "--body", b, "-o", o, "--report", r];
+    args.extend([
+        "--spacing",
+        "0.04",
+        "--sew-max",
+        "0.05",
+        "--settle-max",
+        "0.05",
+    ]);
+    let run = common::run(&args);
+    let (stdout, stderr) = common::text(&run);
+    let said = "the pattern gives no units_in_meter: GarmentCode's default, 100, is assumed";
+    assert!(stdout.contains(said), "{stdout}\n{stderr}");
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    let assumed = r["assumed"].as_array().unwrap();
+    assert!(
+        assumed
+            .iter()
+            .any(|a| a.as_str().unwrap().starts_with(said)),
+        "{r}"
+    );
+}

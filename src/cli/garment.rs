@@ -852,10 +852,17 @@ fn stage_body(
 /// units, the perturbation, and waist edges left free.
 fn assumed(args: &GarmentArgs, pattern: &Pattern, body_note: String) -> Vec<String> {
     let mut assumed = vec![body_note];
-    assumed.push(format!(
-        "the pattern is in units of 1/{} m (its units_in_meter)",
-        pattern.units_in_meter
-    ));
+    assumed.push(if pattern.units_assumed {
+        format!(
+            "the pattern gives no units_in_meter: GarmentCode's default, {}, is assumed (units of 1/{} m, centimetres)",
+            pattern.units_in_meter, pattern.units_in_meter
+        )
+    } else {
+        format!(
+            "the pattern is in units of 1/{} m (its units_in_meter)",
+            pattern.units_in_meter
+        )
+    });
     if let Some(seed) = args.perturb {
         assumed.push(format!(
             "the panels start moved by up to {} m per coordinate (--perturb {seed})",

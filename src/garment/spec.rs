@@ -34,6 +34,8 @@ pub struct Pattern {
     pub stitches: Vec<Stitch>,
     /// Panel units per metre (100: centimetres).
     pub units_in_meter: f64,
+    /// Whether the file gives no `units_in_meter` and GarmentCode's default, 100, is assumed.
+    pub units_assumed: bool,
 }
 
 /// One flat piece of cloth: a closed loop of edges through its vertices, and its 3D placement.
@@ -388,14 +390,18 @@ struct RawPattern {
 #[serde(default)]
 struct RawProperties {
     curvature_coords: String,
-    units_in_meter: f64,
+    /// `None` when the file does not give it: GarmentCode's default [`DEFAULT_UNITS`].
+    units_in_meter: Option<f64>,
 }
+
+/// The `units_in_meter` GarmentCode assumes when a file gives none: centimetres.
+pub const DEFAULT_UNITS: f64 = 100.0;
 
 impl Default for RawProperties {
     fn default() -> Self {
         RawProperties {
             curvature_coords: "relative".into(),
-            units_in_meter: 100.0,
+            units_in_meter: None,
         }
     }
 }
@@ -637,7 +643,8 @@ fn json_error(e: serde_json::Error, path: &Path) -> SpecError {
 }
 
 fn build(raw: RawSpec, problems: &mut Vec<Problem>) -> Pattern {
-    let units = raw.properties.units_in_meter;
+    let units_assumed = raw.properties.units_in_meter.is_none();
+    let units = raw.properties.units_in_meter.unwrap_or(DEFAULT_UNITS);
     if !(units.is_finite() && units > 0.0) {
         problems.push(Problem::BadUnits { value: units });
     }
@@ -679,6 +686,7 @@ fn build(raw: RawSpec, problems: &mut Vec<Problem>) -> Pattern {
         panels,
         stitches,
         units_in_meter: units,
+        units_assumed,
     }
 }
 
