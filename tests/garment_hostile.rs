@@ -555,3 +555,120 @@ fn a_missing_units_in_meter_is_assumed_and_said_so() {
         "{r}"
     );
 }
+
+/// The tube with its front made a 60 cm strip `w` cm wide (its short ends still sewn to the
+/// back's sides).
+fn strip(w: &str) -> String {
+    let strip = format!("[[-30, 0], [30, 0], [30, {w}], [-30, {w}]]");
+    tube().replacen("[[-30, 0], [30, 0], [30, 40], [-30, 40]]", &strip, 1)
+}
+
+#[test]
+fn a_strip_too_thin_for_the_spacing_is_refused_by_name_before_the_solver() {
+    // 0.02 to 0.2 mm wide it passed the reader's area floor and the solver failed on it: "not
+    // positive definite" or "went unstable", naming no panel's width.
+    use drapekit::garment::assemble::{thin_panels, AssembleError};
+    let at = |w: &str, h: f64| {
+        let pattern = parse(&strip(w), Path::new("p.json")).unwrap();
+        let opts = AssembleOptions {
+            spacing: h,
+            ..AssembleOptions::default()
+        };
+        let thin = thin_panels(&pattern, h);
+        match assemble(&pattern, &opts) {
+            Ok(_) => assert!(thin.is_empty()),
+            Err(e) => assert_eq!(e.len(), thin.len()),
+        }
+        thin
+    };
+    for (w, h) in [
+        ("0.002", 0.01),
+        ("0.02", 0.01),
+        ("0.04", 0.01),
+        ("0.07", 0.02),
+        ("0.02", 0.04),
+        ("0.02", 0.004),
+    ] {
+        let thin = at(w, h);
+        assert!(
+            matches!(&thin[..], [AssembleError::Thin { panel, spacing, .. }] if panel == "front" && *spacing == h),
+            "{w} cm at {h}: {thin:?}"
+        );
+        let m = thin[0].to_string();
+        assert!(
+            m.starts_with("panel 'front' is 0.") && m.contains(" mm wide"),
+            "{m}"
+        );
+    }
+    // 0.2 mm: no spacing takes it; 0.7 mm at 2 cm: 1 cm does (it drapes there).
+    let m = at("0.02", 0.01)[0].to_string();
+    assert!(
+        m.ends_with("no spacing from 0.002 to 0.1 m takes it: is it meant to be a panel?"),
+        "{m}"
+    );
+    let m = at("0.07", 0.02)[0].to_string();
+    assert!(
+        m.ends_with("a spacing from 0.0058 to 0.0155 m would take it (--spacing)"),
+        "{m}"
+    );
+    // What drapes is taken: 0.5 mm at 1 cm, 1 mm at 2 cm, 5 mm at 4 cm.
+    for (w, h) in [("0.05", 0.01), ("0.1", 0.02), ("0.5", 0.04)] {
+        assert!(at(w, h).is_empty(), "{w} cm at {h}");
+    }
+    // The command names the file and stops before reading the body.
+    let dir = tempfile::tempdir().unwrap();
+    let pattern = dir.path().join("strip.json");
+    std::fs::write(&pattern, strip("0.02")).unwrap();
+    let (out, report) = (dir.path().join("out"), dir.path().join("r.json"));
+    let (p, o, r) = (
+        pattern.to_str().unwrap(),
+        out.to_str().unwrap(),
+        report.to_str().unwrap(),
+    );
+    let (ok, stderr) = garment_with_report(p, o, r);
+    assert!(!ok);
+    let expected = format!("error: {p}: panel 'front' is 0.");
+    assert!(stderr.starts_with(&expected), "{stderr}");
+}
+
+#[test]
+fn every_panel_of_the_real_patterns_and_fixtures_is_wide_enough_with_margin() {
+    // Width (twice the area over the perimeter of the sampled outline) against the least the
+    // thin check takes, at spacings 1 to 4 cm: the least ratio over every panel.
+    use drapekit::garment::assemble::{thin_panels, THIN_FRACTION, THIN_WIDTH_SPACING};
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut files: Vec<std::path::PathBuf> = ["tube", "circle_skirt"]
+        .iter()
+        .map(|n| root.join(format!("fixtures/garments/{n}_specification.json")))
+        .collect();
+    if let Some(data) = common::realdata() {
+        for f in std::fs::read_dir(data.join("patterns")).unwrap() {
+            let path = f.unwrap().path();
+            if path.extension().is_some_and(|e| e == "json") {
+                files.push(path);
+            }
+        }
+    }
+    let mut least = f64::INFINITY;
+    for path in &files {
+        let p = drapekit::garment::read(path).unwrap();
+        for h in [0.01, 0.015, 0.02, 0.03, 0.04] {
+            assert!(thin_panels(&p, h).is_empty(), "{}", path.display());
+            let to_m = 1.0 / p.units_in_meter;
+            let counts = drapekit::garment::sample::edge_segments(&p, h / to_m);
+            for s in drapekit::garment::sample::sample_all(&p, &counts) {
+                let n = s.points.len();
+                let (mut area, mut perimeter) = (0.0, 0.0);
+                for i in 0..n {
+                    let (a, b) = (s.points[i] * to_m, s.points[(i + 1) % n] * to_m);
+                    area += a.coords.perp(&b.coords) / 2.0;
+                    perimeter += (b - a).norm();
+                }
+                let limit = (THIN_FRACTION * h).max(THIN_WIDTH_SPACING / h);
+                least = least.min(2.0 * area.abs() / perimeter / limit);
+            }
+        }
+    }
+    eprintln!("least width over the thin check's limit: {least:.2}");
+    assert!(least > 20.0, "{least}");
+}

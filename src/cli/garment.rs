@@ -493,6 +493,21 @@ pub(super) fn garment_mesh(
 
 /// Refuses, before any work, panel names that cannot be file names inside the output
 /// folder (`--panels`): empty, `.` or `..`, or holding a path separator or a control character.
+/// Refuses the panels too thin for cloth at the spacing (and at the sewing's coarser one),
+/// naming the file, before the body is read.
+fn check_thin(pattern: &Pattern, path: &Path, settings: &GarmentSettings) -> anyhow::Result<()> {
+    let h = settings.assemble.spacing;
+    let coarse = settings.sew_spacing.filter(|&s| s > h);
+    for h in std::iter::once(h).chain(coarse) {
+        let thin = crate::garment::assemble::thin_panels(pattern, h);
+        if !thin.is_empty() {
+            let lines: Vec<String> = thin.iter().map(ToString::to_string).collect();
+            bail!("{}: {}", path.display(), lines.join("\n"));
+        }
+    }
+    Ok(())
+}
+
 fn check_panel_names(pattern: &crate::garment::spec::Pattern, path: &Path) -> anyhow::Result<()> {
     let bad: Vec<String> = pattern
         .panels
@@ -678,6 +693,7 @@ pub fn run(args: GarmentArgs) -> anyhow::Result<()> {
     let inputs = [args.pattern.as_path(), args.body.as_path()];
     super::check_report(args.report.as_deref(), &args.output, &inputs)?;
     let pattern = crate::garment::read(&args.pattern)?;
+    check_thin(&pattern, &args.pattern, &settings)?;
     if args.panels {
         check_panel_names(&pattern, &args.pattern)?;
     }

@@ -26,6 +26,7 @@
 //! does not fold freely where its outline particles have no element. Measured over perturbed
 //! starts (README, `bench garment`).
 
+use super::drape::SPACING_RANGE;
 use super::sample::{edge_segments, sample_all, stitch_pairs};
 use super::spec::Pattern;
 use crate::cloth::elements::hinge::rim_hinges;
@@ -153,6 +154,16 @@ pub enum AssembleError {
         needed: f64,
         spacing: f64,
     },
+    /// A panel narrower than the cloth at this spacing takes ([`THIN_FRACTION`] of the
+    /// spacing, and a width times spacing of [`THIN_WIDTH_SPACING`]); `spacings`: the range of
+    /// spacings within [`SPACING_RANGE`] that would take it, if any.
+    #[error("panel '{panel}' is {} mm wide (twice its area over its perimeter) at spacing {spacing} m; cloth at this spacing needs a panel at least {} mm wide ({THIN_FRACTION} of the spacing, and width times spacing at least {THIN_WIDTH_SPACING:e} m^2): a narrower one has particles too light for its springs and seams, and the solver fails (an unstable step, or a matrix not positive definite); {}", crate::math::short(width * 1e3), crate::math::short(thin_limit(*spacing) * 1e3), match spacings { Some([a, b]) => format!("a spacing from {a} to {b} m would take it (--spacing)"), None => format!("no spacing from {} to {} m takes it: is it meant to be a panel?", SPACING_RANGE[0], SPACING_RANGE[1]) })]
+    Thin {
+        panel: String,
+        width: f64,
+        spacing: f64,
+        spacings: Option<[f64; 2]>,
+    },
     /// The panels together would give more than [`pattern::MAX_PARTICLES`] particles (each
     /// panel's estimate, and at least its outline's samples, summed before any is built).
     #[error("the pattern's {panels} panel(s) give about {estimate} particles at spacing {spacing} m; a garment has at most {limit}: use a larger spacing, or fewer or smaller panels")]
@@ -169,6 +180,95 @@ pub enum AssembleError {
 /// long one takes its count). A panel of 100,000 edges of 0.1 mm put that many particles
 /// within centimetres of each other, and the solver's blocks between them took 8 GB.
 pub const MAX_CROWDED_SAMPLES: usize = 1000;
+
+/// The least width of a panel, in particle spacings (the width: twice the area over the
+/// perimeter, `w L / (w + L)` for a `w` by `L` strip). Measured with the tube fixture's front
+/// made a 60 cm strip `w` wide, its short ends sewn to the back, cotton, `garment` on
+/// mean_all: at 1 cm spacing 0.4 mm failed (an unstable step) and 0.5 mm draped; at 2 cm 0.7
+/// mm failed and 1 mm draped; at 4 cm 0.2 mm failed and 0.5 mm draped. 0.045 spacings
+/// refuses every failure seen and takes the narrowest drapes at 1 and 2 cm; at 4 cm it is
+/// conservative (1.8 mm).
+pub const THIN_FRACTION: f64 = 0.045;
+
+/// The least width times spacing of a panel, m^2. The stiffest spring's `k dt^2 / m` of such
+/// a strip grows as `1 / (w h)^2` (9.8e13 at 0.02 mm by 1 cm, 6.1e12 at 0.2 mm by 4 mm, the
+/// latter within [`THIN_FRACTION`]) and the solver refuses it above 1e12 (not positive
+/// definite): at about `w h = 2e-6` m^2; twice that here. At spacings of 1 cm and more
+/// [`THIN_FRACTION`] implies it; finer, it is the bound that bites.
+pub const THIN_WIDTH_SPACING: f64 = 4e-6;
+
+/// The least width a panel may have at spacing `h`, m.
+fn thin_limit(h: f64) -> f64 {
+    (THIN_FRACTION * h).max(THIN_WIDTH_SPACING / h)
+}
+
+/// Twice the area over the perimeter of a closed outline: a strip's width.
+fn width(outline: &[Point2]) -> f64 {
+    let n = outline.len();
+    let (mut area, mut perimeter) = (0.0, 0.0);
+    for i in 0..n {
+        let (p, q) = (outline[i], outline[(i + 1) % n]);
+        area += p.coords.perp(&q.coords) / 2.0;
+        perimeter += (q - p).norm();
+    }
+    if perimeter > 0.0 {
+        2.0 * area.abs() / perimeter
+    } else {
+        0.0
+    }
+}
+
+/// Refuses each panel narrower than [`thin_limit`] at spacing `h` (outlines in metres), with
+/// the spacings within [`SPACING_RANGE`] that would take it: from `THIN_WIDTH_SPACING / w`
+/// to `w / THIN_FRACTION`, rounded inwards to a tenth of a millimetre.
+fn check_thin(pattern: &Pattern, outlines: &[Vec<Point2>], h: f64) -> Vec<AssembleError> {
+    let mut errors = Vec::new();
+    for (panel, outline) in pattern.panels.iter().zip(outlines) {
+        let w = width(outline);
+        if w >= thin_limit(h) {
+            continue;
+        }
+        let lo = ((THIN_WIDTH_SPACING / w).max(SPACING_RANGE[0]) * 1e4).ceil() / 1e4;
+        let hi = ((w / THIN_FRACTION).min(SPACING_RANGE[1]) * 1e4).floor() / 1e4;
+        errors.push(AssembleError::Thin {
+            panel: panel.name.clone(),
+            width: w,
+            spacing: h,
+            spacings: (lo <= hi && w > 0.0).then_some([lo, hi]),
+        });
+    }
+    errors
+}
+
+/// Each panel the cloth cannot be made of at spacing `h`, m, for want of width
+/// ([`AssembleError::Thin`]), before any is sampled for a piece: the check [`assemble`]
+/// makes, for a caller to make before other work.
+pub fn thin_panels(pattern: &Pattern, h: f64) -> Vec<AssembleError> {
+    if !(h.is_finite() && h > 0.0) {
+        return vec![AssembleError::Spacing { spacing: h }];
+    }
+    check_thin(pattern, &metre_outlines(pattern, h).1, h)
+}
+
+/// Each panel's outline sampled at spacing `h`, m, with the stitched edges paired (in the
+/// pattern's units), and the same outlines in metres.
+fn metre_outlines(
+    pattern: &Pattern,
+    h: f64,
+) -> (Vec<super::sample::SampledPanel>, Vec<Vec<Point2>>) {
+    let to_m = 1.0 / pattern.units_in_meter;
+    let counts = edge_segments(pattern, h / to_m);
+    let sampled = sample_all(pattern, &counts);
+    let outlines = (sampled.iter())
+        .map(|s| {
+            s.points
+                .iter()
+                .map(|q| Point2::from(q.coords * to_m))
+                .collect()
+        })
+        .collect();
+    (sampled, outlines)
+}
 
 /// Refuses each panel whose outline has more than twice the samples its perimeter needs at
 /// spacing `h`, plus [`MAX_CROWDED_SAMPLES`].
@@ -237,19 +337,14 @@ pub fn assemble(
         return Err(vec![AssembleError::Spacing { spacing: h }]);
     }
     let to_m = 1.0 / pattern.units_in_meter;
-    let counts = edge_segments(pattern, h / to_m);
-    let sampled = sample_all(pattern, &counts);
-    let outlines: Vec<Vec<Point2>> = (sampled.iter())
-        .map(|s| {
-            s.points
-                .iter()
-                .map(|q| Point2::from(q.coords * to_m))
-                .collect()
-        })
-        .collect();
+    let (sampled, outlines) = metre_outlines(pattern, h);
     let crowded = check_crowding(pattern, &outlines, h);
     if !crowded.is_empty() {
         return Err(crowded);
+    }
+    let thin = check_thin(pattern, &outlines, h);
+    if !thin.is_empty() {
+        return Err(thin);
     }
     check_total(&outlines, h).map_err(|e| vec![e])?;
     let (mut pieces, mut errors, mut outline_particle) = (Vec::new(), Vec::new(), Vec::new());
