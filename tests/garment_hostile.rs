@@ -608,7 +608,7 @@ fn a_strip_too_thin_for_the_spacing_is_refused_by_name_before_the_solver() {
     );
     let m = at("0.07", 0.02)[0].to_string();
     assert!(
-        m.ends_with("a spacing from 0.0058 to 0.0155 m would take it (--spacing)"),
+        m.ends_with("a spacing from 0.0058 to 0.0155 m would take it (garment --spacing, or spacing in a scene's [[garment]])"),
         "{m}"
     );
     // What drapes is taken: 0.5 mm at 1 cm, 1 mm at 2 cm, 5 mm at 4 cm.
