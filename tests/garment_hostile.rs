@@ -556,6 +556,40 @@ fn a_missing_units_in_meter_is_assumed_and_said_so() {
     );
 }
 
+#[test]
+fn a_scenes_garment_without_units_in_meter_is_assumed_in_centimetres_and_warned() {
+    // `drape` with a [[garment]] took GarmentCode's default without a word, where `garment`
+    // says it in its summary and report.
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let text = tube().replacen(r#", "units_in_meter": 100"#, "", 1);
+    std::fs::write(d.join("p.json"), &text).unwrap();
+    common::write_y_up_obj(
+        &common::cylinder(0.186, 0.5, 1.5, 48),
+        &d.join("column.obj"),
+    );
+    let scene = "units = \"m\"\n[[object]]\nmesh = \"column.obj\"\nup = \"y\"\n\
+                 [[garment]]\npattern = \"p.json\"\nspacing = 0.04\nsew_max = 0.05\nsettle_max = 0.05\n";
+    std::fs::write(d.join("scene.toml"), scene).unwrap();
+    let (s, o, r) = (d.join("scene.toml"), d.join("out"), d.join("r.json"));
+    let args = ["drape", s.to_str().unwrap(), "-o", o.to_str().unwrap()];
+    let run = common::run(&[&args[..], &["--report", r.to_str().unwrap()]].concat());
+    let (stdout, stderr) = common::text(&run);
+    assert!(run.status.success(), "{stdout}\n{stderr}");
+    let said = "the pattern gives no units_in_meter: GarmentCode's default, 100, is assumed";
+    assert!(stderr.contains(said), "{stderr}");
+    let report = std::fs::read_to_string(&r).unwrap();
+    assert!(report.contains(said), "{report}");
+    // A pattern that gives its units is not warned about.
+    std::fs::write(d.join("p.json"), tube()).unwrap();
+    let run = common::run(&args);
+    let (stdout, stderr) = common::text(&run);
+    assert!(
+        run.status.success() && !stderr.contains("units_in_meter"),
+        "{stdout}\n{stderr}"
+    );
+}
+
 /// The tube with its front made a 60 cm strip `w` cm wide (its short ends still sewn to the
 /// back's sides).
 fn strip(w: &str) -> String {

@@ -320,6 +320,12 @@ tube_case "a panel with its vertices on a line" '0,/\[\[-30, 0\], \[30, 0\], \[3
 tube_case "edge loops twice round" 's/{"endpoints": \[3, 0\]}\],/{"endpoints": [3, 0]}, {"endpoints": [0, 1]}, {"endpoints": [1, 2]}, {"endpoints": [2, 3]}, {"endpoints": [3, 0]}],/'
 tube_case "a panel name with a line break" 's/"back"/"back\\nv 1 2 3"/g'
 tube_case "a vertex with three coordinates" 's/\[\[-30, 0\], \[30, 0\]/[[-30, 0, 0], [30, 0]/'
+tube_case "an empty panel name" 's/"back"/""/g'
+tube_case "a panel turned by 1e300 degrees" 's/"rotation": \[0, 180, 0\]/"rotation": [0, 1e300, 0]/'
+tube_case "right_wrong given twice in a stitch" 's/{"panel": "back", "edge": 3}\]/{"panel": "back", "edge": 3}, "right_wrong", "right_wrong"]/'
+tube_case "a key given twice in a stitch element" 's/{"panel": "back", "edge": 3}/{"panel": "back", "edge": 3, "edge": 2}/'
+tube_case "a curvature with its type given twice" '0,/{"endpoints": \[0, 1\]}/s//{"endpoints": [0, 1], "curvature": {"type": "circle", "type": "cubic", "params": [[0.3, 0.1], [0.6, 0.1]]}}/'
+tube_case "a panel 0.2 mm wide, too thin for the cloth at 1 cm" '0,/\[\[-30, 0\], \[30, 0\], \[30, 40\], \[-30, 40\]\]/s//[[-30, 0], [30, 0], [30, 0.02], [-30, 0.02]]/'
 new
 cp "$fixtures/garments/tube_specification.json" .
 case_ "Outputs stay where they belong" "garment: --report over the pattern" garment tube_specification.json --body no_such_body.obj -o out --report tube_specification.json

@@ -135,8 +135,15 @@ fn check_pattern(
     if let Some(f) = &fit {
         warn_too_short(f);
     }
-    let warnings: Vec<String> = placement_warning(&spec.pattern, bodies, settings)
+    let units = (spec.pattern.units_assumed).then(|| {
+        format!(
+            "garment.pattern: the pattern gives no units_in_meter: GarmentCode's default, {}, is assumed (units of 1/{} m, centimetres)",
+            spec.pattern.units_in_meter, spec.pattern.units_in_meter
+        )
+    });
+    let warnings: Vec<String> = units
         .into_iter()
+        .chain(placement_warning(&spec.pattern, bodies, settings))
         .collect();
     for w in &warnings {
         eprintln!("warning: {}: {w}", sc.path.display());
