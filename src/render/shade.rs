@@ -41,11 +41,40 @@ pub fn light(right: &Vec3, up: &Vec3, forward: &Vec3) -> Vec3 {
     (-2.0 * forward + up - 0.5 * right).normalize()
 }
 
+/// Meshes whose extent (their largest coordinate difference) lies outside `[1/R, R]` for this
+/// `R = 2^200` have their edges scaled to about 1 before the cross products: at 1e-300 m every
+/// cross product underflowed and the picture was ambient only; from about 1e77 m their squared
+/// lengths overflow and the normals came out zero just the same.
+const EXTENT_RANGE: f64 = ((1u128 << 100) as f64) * ((1u128 << 100) as f64);
+
+/// The power of two that brings a mesh's extent to about 1 when it lies outside
+/// [`EXTENT_RANGE`], and 1 for any other mesh. Scaling by a power of two is exact: the unit
+/// normals are those of the mesh as it is.
+fn edge_scale(mesh: &TriMesh) -> f64 {
+    let extent = mesh.bbox().map_or(0.0, |b| (b.max - b.min).amax());
+    if extent.is_finite() && extent > 0.0 && !(1.0 / EXTENT_RANGE..=EXTENT_RANGE).contains(&extent)
+    {
+        2f64.powi(-(extent.log2().floor() as i32))
+    } else {
+        1.0
+    }
+}
+
+/// `(b - a) x (c - a)` of face `f`, its edges scaled by `s` (a power of two).
+fn scaled_cross(mesh: &TriMesh, f: usize, s: f64) -> Vec3 {
+    if s == 1.0 {
+        return mesh.face_cross(f);
+    }
+    let [a, b, c] = mesh.corners(f);
+    ((b - a) * s).cross(&((c - a) * s))
+}
+
 /// Unit face normals (zero for a degenerate face).
 pub fn face_normals(mesh: &TriMesh) -> Vec<Vec3> {
+    let s = edge_scale(mesh);
     (0..mesh.faces.len())
         .map(|f| {
-            mesh.face_cross(f)
+            scaled_cross(mesh, f, s)
                 .try_normalize(0.0)
                 .unwrap_or_else(Vec3::zeros)
         })
@@ -54,9 +83,10 @@ pub fn face_normals(mesh: &TriMesh) -> Vec<Vec3> {
 
 /// Area-weighted vertex normals, unit (zero where the faces' normals cancel).
 pub fn vertex_normals(mesh: &TriMesh) -> Vec<Vec3> {
+    let s = edge_scale(mesh);
     let mut n = vec![Vec3::zeros(); mesh.positions.len()];
     for (f, face) in mesh.faces.iter().enumerate() {
-        let c = mesh.face_cross(f);
+        let c = scaled_cross(mesh, f, s);
         for &v in face {
             n[v as usize] += c;
         }
@@ -82,4 +112,25 @@ pub fn brightness(n: &Vec3, face: &Vec3, forward: &Vec3, light: &Vec3) -> f64 {
     let towards = if face.dot(forward) > 0.0 { -1.0 } else { 1.0 };
     let n = n.try_normalize(0.0).unwrap_or_else(Vec3::zeros) * towards;
     AMBIENT + (1.0 - AMBIENT) * n.dot(light).max(0.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::generate;
+
+    #[test]
+    fn a_mesh_of_any_size_has_the_normals_of_its_shape() {
+        // 1e-300 m: the edges' cross products underflowed to zero and every normal was zero.
+        let m = generate::icosphere(2);
+        let (f0, v0) = (face_normals(&m), vertex_normals(&m));
+        for scale in [1e-300, 1e-150, 1e-60, 1e-3, 1e90] {
+            let mut t = m.clone();
+            t.positions.iter_mut().for_each(|p| *p *= scale);
+            let (f, v) = (face_normals(&t), vertex_normals(&t));
+            for (a, b) in f.iter().zip(&f0).chain(v.iter().zip(&v0)) {
+                assert!((a - b).norm() < 1e-12, "{scale}: {a:?} against {b:?}");
+            }
+        }
+    }
 }
