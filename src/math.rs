@@ -75,9 +75,22 @@ impl Aabb {
         self.max - self.min
     }
 
-    /// Length of the diagonal.
+    /// Length of the diagonal, without underflow or overflow for a box of any finite size (a
+    /// box whose sides all lie within 1e-150 to 1e150 takes the plain formula).
+    ///
+    /// ```
+    /// use drapekit::math::{Aabb, Point3};
+    /// let b = Aabb::of_points(&[Point3::origin(), Point3::new(3e-300, 4e-300, 0.0)]).unwrap();
+    /// assert!((b.diagonal() / 5e-300 - 1.0).abs() < 1e-15);
+    /// ```
     pub fn diagonal(&self) -> f64 {
-        self.size().norm()
+        let size = self.size();
+        let m = size.amax();
+        if m > 0.0 && !(1e-150..=1e150).contains(&m) {
+            m * (size / m).norm()
+        } else {
+            size.norm()
+        }
     }
 
     /// Centre point.

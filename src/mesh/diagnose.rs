@@ -307,9 +307,10 @@ fn closed_volumes(plan: &Plan, applied: bool) -> Vec<ClosedVolume> {
         .enumerate()
         .filter(|(_, c)| c.closed)
         .map(|(i, c)| {
-            let v = c.volume.unwrap_or(0.0);
-            let v = if applied && c.inverted { -v } else { v };
-            let outward = c.orientable && (applied || c.inconsistent_faces == 0) && v > 0.0;
+            let flip = if applied && c.inverted { -1.0 } else { 1.0 };
+            let v = flip * c.volume.unwrap_or(0.0);
+            let positive = flip * c.volume_sign > 0.0;
+            let outward = c.orientable && (applied || c.inconsistent_faces == 0) && positive;
             ClosedVolume {
                 component: i,
                 faces: c.faces,

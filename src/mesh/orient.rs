@@ -47,6 +47,10 @@ pub struct ComponentInfo {
     pub inconsistent_faces: usize,
     /// Signed volume with the majority winding (closed components only).
     pub volume: Option<f64>,
+    /// The sign of `volume` (-1, 0 or 1), found at a scale where it does not underflow: the
+    /// volume of a 1e-300 m shell is zero in `f64`, its sign is not.
+    #[serde(skip)]
+    pub volume_sign: f64,
     /// Mean generalized winding number with the majority winding (open components only).
     pub winding: Option<f64>,
     /// The whole component must flip to face outward.
@@ -195,6 +199,7 @@ impl Walk {
             orientable,
             inconsistent_faces: inconsistent,
             volume: None,
+            volume_sign: 0.0,
             winding: None,
             inverted: false,
             undecided: false,
@@ -249,6 +254,8 @@ impl Walk {
     /// Measures each component (signed volume when closed, mean winding number when open)
     /// and, with `outward`, decides whether an orientable one is flipped whole or undecided.
     fn face_outward(&mut self, mesh: &TriMesh, outward: bool) {
+        let (scaled, s) = well_scaled(mesh);
+        let mesh = scaled.as_ref().unwrap_or(mesh);
         let bbox = mesh.bbox();
         let d = bbox.map_or(0.0, |b| b.diagonal());
         let origin = bbox.map_or(Point3::origin(), |b| b.center());
@@ -256,7 +263,8 @@ impl Walk {
             let list = &self.members[c];
             if info.closed {
                 let v = signed_volume(mesh, list, &self.flip, origin);
-                info.volume = Some(v);
+                info.volume = Some(v / (s * s * s));
+                info.volume_sign = if v == 0.0 { 0.0 } else { v.signum() };
                 if outward && info.orientable {
                     decide(info, v, tol::FLAT_VOLUME_REL * d * d * d);
                 }
@@ -274,6 +282,21 @@ impl Walk {
             }
         }
     }
+}
+
+/// `mesh` scaled by the power of two `s` that brings its extent to about 1 when that extent is
+/// outside 1e-100 to 1e100 (`None`, `s` = 1, for any other mesh): volumes of a 1e-300 m mesh
+/// underflow, and every closed one was undecided. A power of two scales exactly, so the signs
+/// and windings are the mesh's own.
+fn well_scaled(mesh: &TriMesh) -> (Option<TriMesh>, f64) {
+    let extent = mesh.bbox().map_or(0.0, |b| b.size().amax());
+    if extent == 0.0 || !extent.is_finite() || (1e-100..=1e100).contains(&extent) {
+        return (None, 1.0);
+    }
+    let s = 2f64.powi(-(extent.log2().floor() as i32));
+    let mut m = mesh.clone();
+    m.positions.iter_mut().for_each(|p| *p *= s);
+    (Some(m), s)
 }
 
 /// A component whose `measure` (volume or winding) is within `tie` of zero is undecided;

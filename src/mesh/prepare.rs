@@ -170,6 +170,7 @@ fn orient_and_diagnose(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::Vec3;
     use crate::mesh::diagnose::{diagnose, ShellState};
     use crate::mesh::generate;
 
@@ -196,5 +197,31 @@ mod tests {
         let d = diagnose(&soup);
         assert!(d.winding_consistent && d.outward && d.watertight);
         assert!((soup.signed_volume() - orig.signed_volume()).abs() < 1e-12);
+    }
+
+    /// A soup of an inside-out icosphere, at any scale from 1e-300 to 1e90, is welded, turned
+    /// outward and found closed, as at 1: at 1e-300 the weld distance (from a diagonal whose
+    /// square underflowed) was zero and the volume's sign lost, so the soup stayed open, or a
+    /// shell only "oriented".
+    #[test]
+    fn a_soup_of_any_size_is_welded_turned_outward_and_closed() {
+        let orig = generate::icosphere(2);
+        for scale in [1e-300, 1e-200, 1e-120, 1.0, 1e90] {
+            let mut soup = TriMesh::default();
+            for face in &orig.faces {
+                let base = soup.positions.len() as u32;
+                // Each corner nudged by a millionth of the scale (as an export rounds), inside
+                // out.
+                soup.positions.extend(face.iter().map(|&v| {
+                    (orig.positions[v as usize] * scale)
+                        + Vec3::repeat(scale * 1e-9 * (base % 7) as f64)
+                }));
+                soup.faces.push([base, base + 2, base + 1]);
+            }
+            let r = prepare(&mut soup, &PrepareOptions::default());
+            assert_eq!(r.after.shell_state, ShellState::Closed, "{scale}");
+            assert_eq!(r.output_vertices, orig.positions.len(), "{scale}");
+            assert_eq!(r.flipped_faces, orig.faces.len(), "{scale}");
+        }
     }
 }
