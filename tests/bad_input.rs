@@ -428,3 +428,37 @@ fn hostile_ply_float_coordinate_beyond_f32_is_refused() {
         &["big.ply:10: coordinate 1e39 does not fit the declared type float (at most 3.4028234663852886e38 in magnitude)"],
     );
 }
+
+#[test]
+fn a_mesh_too_small_for_32_bit_floats_is_not_written_as_binary_stl_or_gltf() {
+    // A tetrahedron 1e-40 across went into binary STL and glTF as subnormal 32-bit floats,
+    // rounded to multiples of 1.4e-45: its shape silently lost. PLY and OBJ keep 64 bits.
+    let tet = |s: f64| {
+        format!(
+            "v 0 0 0\nv {s:e} 0 0\nv 0 {s:e} 0\nv 0 0 {s:e}\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"
+        )
+    };
+    for (s, written) in [(1e-40, false), (1e-300, false), (1e-37, true)] {
+        let dir = tempfile::tempdir().unwrap();
+        let input = dir.path().join("tet.obj");
+        std::fs::write(&input, tet(s)).unwrap();
+        for out in ["out.stl", "out.glb", "out.ply"] {
+            let o = run(&[
+                "convert",
+                input.to_str().unwrap(),
+                "-o",
+                dir.path().join(out).to_str().unwrap(),
+            ]);
+            let (_, err) = text(&o);
+            let expect = written || out == "out.ply";
+            assert_eq!(o.status.success(), expect, "{s} {out}: {err}");
+            assert_eq!(dir.path().join(out).exists(), expect, "{s} {out}");
+            if !expect {
+                assert!(
+                    err.contains(out) && err.contains("below 32-bit floats' normal range"),
+                    "{err}"
+                );
+            }
+        }
+    }
+}

@@ -257,12 +257,15 @@ pub enum IoError {
     #[error("cannot write {}: vertex {vertex} has a non-finite coordinate", path.display())]
     NonFinite { path: PathBuf, vertex: usize },
     /// A coordinate too large for 32-bit float (binary STL).
-    #[error("cannot write {}: vertex {vertex} has coordinate {value}, beyond 32-bit float range (binary STL and glTF store 32-bit floats); write PLY, OBJ or --ascii STL", path.display())]
+    #[error("cannot write {}: vertex {vertex} has coordinate {value:e}, beyond 32-bit float range (binary STL and glTF store 32-bit floats); write PLY, OBJ or --ascii STL", path.display())]
     OutOfFloatRange {
         path: PathBuf,
         vertex: usize,
         value: f64,
     },
+    /// A mesh too small for 32-bit floats (binary STL, glTF): `value` is its largest coordinate.
+    #[error("cannot write {}: the mesh's largest coordinate is {value:e}, below 32-bit floats' normal range ({:e}): binary STL and glTF would round its shape away; write PLY, OBJ or --ascii STL, or rescale it (--to-units)", path.display(), f32::MIN_POSITIVE)]
+    TooSmallForFloat { path: PathBuf, value: f64 },
     /// Vertex colours that do not fit their mesh (glTF writer).
     #[error("cannot write {}: {reason}", path.display())]
     BadColors { path: PathBuf, reason: String },

@@ -379,10 +379,18 @@ pub fn stage_mesh(
                 .unwrap()
                 .downcast::<stl::OutOfRange>()
                 .unwrap();
-            IoError::OutOfFloatRange {
-                path,
-                vertex: r.vertex,
-                value: r.value,
+            // A value below 1 is a mesh too small for 32-bit floats, not one too large.
+            if r.value.abs() < 1.0 {
+                IoError::TooSmallForFloat {
+                    path,
+                    value: r.value,
+                }
+            } else {
+                IoError::OutOfFloatRange {
+                    path,
+                    vertex: r.vertex,
+                    value: r.value,
+                }
             }
         }
         e => e,

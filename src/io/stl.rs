@@ -460,6 +460,12 @@ pub fn write_binary(w: &mut impl Write, mesh: &TriMesh) -> std::io::Result<()> {
             },
         ));
     }
+    if let Some(value) = below_f32(mesh) {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            OutOfRange { vertex: 0, value },
+        ));
+    }
     let mut header = [b' '; 80];
     let tag = b"drapekit binary STL";
     header[..tag.len()].copy_from_slice(tag);
@@ -483,7 +489,19 @@ pub fn write_binary(w: &mut impl Write, mesh: &TriMesh) -> std::io::Result<()> {
     Ok(())
 }
 
-/// A coordinate beyond 32-bit float range, for binary STL.
+/// The largest coordinate's magnitude of a mesh too small for 32-bit floats: nonzero and below
+/// `f32::MIN_POSITIVE` (1.2e-38), where they keep less than their 24 bits (below it they are
+/// multiples of 1.4e-45: a mesh 1e-44 across is rounded to a tenth of its size); `None` for
+/// any other.
+pub fn below_f32(mesh: &TriMesh) -> Option<f64> {
+    let largest = (mesh.positions.iter())
+        .flat_map(|p| p.iter().map(|c| c.abs()))
+        .fold(0.0, f64::max);
+    (largest > 0.0 && largest < f64::from(f32::MIN_POSITIVE)).then_some(largest)
+}
+
+/// A coordinate beyond 32-bit float range, or (`vertex` 0, `value` the largest coordinate) a
+/// mesh too small for them ([`below_f32`]), for binary STL.
 #[derive(Debug)]
 pub struct OutOfRange {
     /// Vertex index.

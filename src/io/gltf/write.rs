@@ -162,6 +162,10 @@ fn check(path: &Path, scene: &Scene) -> Result<(), IoError> {
 }
 
 fn check_part(path: &Path, part: &Part) -> Result<(), IoError> {
+    if let Some(value) = crate::io::stl::below_f32(&part.mesh) {
+        let path = path.to_path_buf();
+        return Err(IoError::TooSmallForFloat { path, value });
+    }
     for (v, p) in part.mesh.positions.iter().enumerate() {
         if !p.iter().all(|c| c.is_finite()) {
             let path = path.to_path_buf();
