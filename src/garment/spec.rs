@@ -625,7 +625,11 @@ pub fn parse(text: &str, path: &Path) -> Result<Pattern, SpecError> {
 }
 
 fn json_error(e: serde_json::Error, path: &Path) -> SpecError {
-    let (path, line, column, message) = (path.to_path_buf(), e.line(), e.column(), e.to_string());
+    let (path, line, column) = (path.to_path_buf(), e.line(), e.column());
+    // serde's text ends with its place, which the error already leads with (`p.json:8:82:`).
+    let text = e.to_string();
+    let place = format!(" at line {line} column {column}");
+    let message = text.strip_suffix(&place).unwrap_or(&text).to_string();
     match e.classify() {
         serde_json::error::Category::Data => SpecError::Shape {
             path,
