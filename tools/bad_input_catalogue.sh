@@ -461,23 +461,22 @@ new; float_ply 0 "3 0 1 nan" >fn.ply
 case_ "$O" "PLY face index NaN" convert fn.ply -o out.ply
 new; float_ply 1e39 "3 0 1 2" >big.ply
 case_ "$O" "PLY float coordinate 1e39 (beyond f32)" convert big.ply -o out.ply
-for s in 1e100 1e-100 1e300; do
+# tetra S: a regular tetrahedron at scale S, as t.obj in a fresh case folder.
+tetra() {
     new
     python3 -c "
-s = $s
+s = $1
 for q in [(1, 1, 1), (1, -1, -1), (-1, 1, -1), (-1, -1, 1)]:
     print('v %r %r %r' % (q[0] * s, q[1] * s, q[2] * s))
 print('f 1 2 3\nf 1 3 4\nf 1 4 2\nf 2 4 3')" >t.obj
+}
+for s in 1e100 1e-100 1e300; do
+    tetra "$s"
     check='test -e o.obj && echo "$(grep -c "^f " o.obj) faces written" || echo "nothing written"'
     case_ "$O" "a regular tetrahedron at scale $s" convert t.obj -o o.obj
 done
 for s in 1e-40 1e-300; do
-    new
-    python3 -c "
-s = $s
-for q in [(1, 1, 1), (1, -1, -1), (-1, 1, -1), (-1, -1, 1)]:
-    print('v %r %r %r' % (q[0] * s, q[1] * s, q[2] * s))
-print('f 1 2 3\nf 1 3 4\nf 1 4 2\nf 2 4 3')" >t.obj
+    tetra "$s"
     case_ "$O" "a regular tetrahedron at scale $s to binary STL (too small for 32-bit floats)" convert t.obj -o o.stl
 done
 drape_case "$O" "cloth placed at 1e308 m" 'position = [0.0, 0.0, 0.33]=>position = [0.0, 0.0, 1e308]'

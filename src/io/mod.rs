@@ -379,8 +379,7 @@ pub fn stage_mesh(
                 .unwrap()
                 .downcast::<stl::OutOfRange>()
                 .unwrap();
-            // A value below 1 is a mesh too small for 32-bit floats, not one too large.
-            if r.value.abs() < 1.0 {
+            if r.too_small {
                 IoError::TooSmallForFloat {
                     path,
                     value: r.value,

@@ -457,13 +457,18 @@ pub fn write_binary(w: &mut impl Write, mesh: &TriMesh) -> std::io::Result<()> {
             OutOfRange {
                 vertex: v,
                 value: c,
+                too_small: false,
             },
         ));
     }
     if let Some(value) = below_f32(mesh) {
         return Err(std::io::Error::new(
             std::io::ErrorKind::InvalidInput,
-            OutOfRange { vertex: 0, value },
+            OutOfRange {
+                vertex: 0,
+                value,
+                too_small: true,
+            },
         ));
     }
     let mut header = [b' '; 80];
@@ -500,18 +505,27 @@ pub fn below_f32(mesh: &TriMesh) -> Option<f64> {
     (largest > 0.0 && largest < f64::from(f32::MIN_POSITIVE)).then_some(largest)
 }
 
-/// A coordinate beyond 32-bit float range, or (`vertex` 0, `value` the largest coordinate) a
-/// mesh too small for them ([`below_f32`]), for binary STL.
+/// A coordinate beyond 32-bit float range, or a mesh too small for them ([`below_f32`]), for
+/// binary STL.
 #[derive(Debug)]
 pub struct OutOfRange {
-    /// Vertex index.
+    /// Vertex index (0 for a mesh too small).
     pub vertex: usize,
-    /// The coordinate.
+    /// The coordinate (the largest, for a mesh too small).
     pub value: f64,
+    /// The whole mesh is too small, rather than one coordinate too large.
+    pub too_small: bool,
 }
 
 impl std::fmt::Display for OutOfRange {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if self.too_small {
+            return write!(
+                f,
+                "the mesh's largest coordinate {:e} is below 32-bit floats' normal range",
+                self.value
+            );
+        }
         write!(
             f,
             "vertex {} coordinate {} is beyond 32-bit float range",

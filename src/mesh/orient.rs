@@ -290,10 +290,10 @@ impl Walk {
 /// and windings are the mesh's own.
 fn well_scaled(mesh: &TriMesh) -> (Option<TriMesh>, f64) {
     let extent = mesh.bbox().map_or(0.0, |b| b.size().amax());
-    if extent == 0.0 || !extent.is_finite() || (1e-100..=1e100).contains(&extent) {
+    let s = crate::mesh::clean::unit_scale(extent);
+    if s == 1.0 || (1e-100..=1e100).contains(&extent) {
         return (None, 1.0);
     }
-    let s = 2f64.powi(-(extent.log2().floor() as i32));
     let mut m = mesh.clone();
     m.positions.iter_mut().for_each(|p| *p *= s);
     (Some(m), s)

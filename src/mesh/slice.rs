@@ -136,21 +136,18 @@ pub struct Slicer<'a> {
 impl<'a> Slicer<'a> {
     /// The bands of `mesh`'s faces.
     pub fn new(mesh: &'a TriMesh) -> Slicer<'a> {
-        let range = |f: &[u32; 3]| {
-            let z = f.map(|v| mesh.positions[v as usize].z);
-            (z[0].min(z[1]).min(z[2]), z[0].max(z[1]).max(z[2]))
-        };
-        let (lo, hi) = (mesh.faces.iter().map(range))
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), (l, h)| {
+        let ranges: Vec<(f64, f64)> = (mesh.faces.iter())
+            .map(|f| {
+                let z = f.map(|v| mesh.positions[v as usize].z);
+                (z[0].min(z[1]).min(z[2]), z[0].max(z[1]).max(z[2]))
+            })
+            .collect();
+        let (lo, hi) = (ranges.iter())
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &(l, h)| {
                 (a.min(l), b.max(h))
             });
-        let n = mesh.faces.len().max(1);
-        let mean = mesh
-            .faces
-            .iter()
-            .map(|f| range(f).1 - range(f).0)
-            .sum::<f64>()
-            / n as f64;
+        let n = ranges.len().max(1);
+        let mean = ranges.iter().map(|(l, h)| h - l).sum::<f64>() / n as f64;
         let bands = if hi > lo && mean > 0.0 {
             ((hi - lo) / mean).clamp(1.0, n as f64) as usize
         } else {
@@ -167,7 +164,7 @@ impl<'a> Slicer<'a> {
             start: vec![0; bands + 1],
             faces: Vec::new(),
         };
-        s.fill(bands, range);
+        s.fill(bands, &ranges);
         s
     }
 
@@ -181,13 +178,10 @@ impl<'a> Slicer<'a> {
         }
     }
 
-    /// Counts, then lists each face in every band its heights reach (faces in order).
-    fn fill(&mut self, bands: usize, range: impl Fn(&[u32; 3]) -> (f64, f64)) {
-        let spans: Vec<(usize, usize)> = (self.mesh.faces.iter())
-            .map(|f| {
-                let (l, h) = range(f);
-                (self.band_of(l, bands), self.band_of(h, bands))
-            })
+    /// Counts, then lists each face in every band its heights `ranges` reach (faces in order).
+    fn fill(&mut self, bands: usize, ranges: &[(f64, f64)]) {
+        let spans: Vec<(usize, usize)> = (ranges.iter())
+            .map(|&(l, h)| (self.band_of(l, bands), self.band_of(h, bands)))
             .collect();
         for &(a, b) in &spans {
             for c in &mut self.start[a + 1..=b + 1] {

@@ -52,11 +52,10 @@ const EXTENT_RANGE: f64 = ((1u128 << 100) as f64) * ((1u128 << 100) as f64);
 /// normals are those of the mesh as it is.
 fn edge_scale(mesh: &TriMesh) -> f64 {
     let extent = mesh.bbox().map_or(0.0, |b| (b.max - b.min).amax());
-    if extent.is_finite() && extent > 0.0 && !(1.0 / EXTENT_RANGE..=EXTENT_RANGE).contains(&extent)
-    {
-        2f64.powi(-(extent.log2().floor() as i32))
-    } else {
+    if (1.0 / EXTENT_RANGE..=EXTENT_RANGE).contains(&extent) {
         1.0
+    } else {
+        crate::mesh::clean::unit_scale(extent)
     }
 }
 
